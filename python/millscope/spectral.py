@@ -1,0 +1,302 @@
+"""Spectral analysis of torque blocks (paper sections 3.2, 6.2-6.4; DESIGN.md section 4).
+
+Thin, typed wrappers over the C++ DSP core (FFTW): spectra, the lifter torque harmonic (LTH),
+band removal and the spectral energy of eq. (11).
+
+Every function takes a :class:`~millscope.record.TorqueRecord` (usually a block of one), or a
+plain 1-D array together with ``sample_rate_hz``.
+
+Windows: ``"hann"`` (symmetric, eq. 10, the default), ``"hann_periodic"`` and ``"rectangular"``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Literal, Union
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import _core
+from .record import TorqueRecord
+
+__all__ = [
+    "Spectrum",
+    "Peak",
+    "SpectralEnergy",
+    "WindowName",
+    "spectrum",
+    "window_factors",
+    "lifter_harmonic_hz",
+    "find_peak",
+    "spectral_energy",
+    "band_stop",
+]
+
+WindowName = Literal["hann", "hann_periodic", "rectangular"]
+Samples = Union[TorqueRecord, ArrayLike]
+RemoveItem = Union[Literal["mean"], float]
+
+_WINDOWS = ("hann", "hann_periodic", "rectangular")
+
+
+def _samples(data: Samples, sample_rate_hz: float | None) -> tuple[NDArray[np.float64], float]:
+    """(samples, fs) from a record, or from an array and its sample rate."""
+    if isinstance(data, TorqueRecord):
+        if sample_rate_hz is not None:
+            raise ValueError("sample_rate_hz is taken from the TorqueRecord; do not pass it too")
+        return data.torque_Nm, data.sample_rate_hz
+    if sample_rate_hz is None:
+        raise ValueError("sample_rate_hz (Hz) is required when the data is an array, not a "
+                         "TorqueRecord")
+    x = np.ascontiguousarray(data, dtype=np.float64)
+    if x.ndim != 1:
+        raise ValueError(f"data must be 1-D; got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("data holds NaN or infinite samples; every sample must be finite")
+    fs = float(sample_rate_hz)
+    if not (np.isfinite(fs) and fs > 0):
+        raise ValueError(f"sample_rate_hz = {sample_rate_hz!r} is not valid; it must be > 0")
+    return x, fs
+
+
+def _check_window(window: str) -> None:
+    if window not in _WINDOWS:
+        raise ValueError(f"window = {window!r} is not known; use one of {', '.join(_WINDOWS)}")
+
+
+def _check_resolution(n: int, fs: float, resolution_hz: float | None) -> None:
+    """Eq. (9): df = 1/TR; a block too short for the asked resolution is an error."""
+    if resolution_hz is None:
+        return
+    if not resolution_hz > 0:
+        raise ValueError(f"resolution_hz = {resolution_hz!r} is not valid; it must be > 0")
+    df = fs / n
+    if df > resolution_hz * (1 + 1e-9):
+        raise ValueError(
+            f"block of {n / fs:g} s resolves df = 1/TR = {df:g} Hz, coarser than the asked "
+            f"resolution_hz = {resolution_hz:g} Hz; it needs at least {1 / resolution_hz:g} s")
+
+
+@dataclass(frozen=True)
+class Spectrum:
+    """Single-sided spectrum of a windowed block.
+
+    Attributes
+    ----------
+    freq : ndarray
+        Bin frequencies k/TR, Hz.
+    amplitude : ndarray
+        Amplitude corrected for the window's coherent gain (N m for torque): a sinusoid of
+        amplitude A reads about A at its bin.
+    psd : ndarray
+        Power spectral density, (N m)^2/Hz; equals ``scipy.signal.periodogram(...,
+        scaling="density")`` for the same window.
+    power : ndarray
+        Squared RMS per bin, (N m)^2; equals ``scaling="spectrum"`` of the periodogram.
+    window : str
+        The window used.
+    resolution_hz : float
+        df = 1/TR, Hz (eq. 9).
+    """
+
+    freq: NDArray[np.float64]
+    amplitude: NDArray[np.float64]
+    psd: NDArray[np.float64]
+    power: NDArray[np.float64]
+    window: str
+    resolution_hz: float
+
+
+def spectrum(data: Samples, *, window: WindowName = "hann", sample_rate_hz: float | None = None,
+             resolution_hz: float | None = None) -> Spectrum:
+    """The single-sided spectrum of a block (no detrending: the mean appears at 0 Hz).
+
+    Parameters
+    ----------
+    data : TorqueRecord or array_like
+        The block.
+    window : {"hann", "hann_periodic", "rectangular"}
+        Window applied before the FFT; ``"hann"`` is the paper's symmetric Hann (eq. 10).
+    sample_rate_hz : float, optional
+        Sampling frequency in Hz, required for a plain array.
+    resolution_hz : float, optional
+        If given, refuse a block too short to resolve it (eq. 9).
+    """
+    _check_window(window)
+    x, fs = _samples(data, sample_rate_hz)
+    _check_resolution(x.size, fs, resolution_hz)
+    return Spectrum(
+        freq=_core.bin_frequencies(x.size, fs),
+        amplitude=_core.spectrum(x, fs, window, "amplitude"),
+        psd=_core.spectrum(x, fs, window, "psd"),
+        power=_core.spectrum(x, fs, window, "power"),
+        window=window,
+        resolution_hz=fs / x.size,
+    )
+
+
+def window_factors(window: WindowName, n: int) -> _core.WindowFactors:
+    """Coherent gain, power gain, equivalent noise bandwidth (bins) and main-lobe half-width of a
+    window of ``n`` samples."""
+    _check_window(window)
+    if n < 1:
+        raise ValueError(f"n = {n} is not valid; a window needs n >= 1 samples")
+    return _core.window_factors(window, n)
+
+
+def lifter_harmonic_hz(n_lifters: int, rotation_hz: float) -> float:
+    """Frequency of the lifter torque harmonic, n_lifters x rotation frequency (section 6.2), Hz."""
+    if int(n_lifters) != n_lifters or n_lifters < 1:
+        raise ValueError(f"n_lifters = {n_lifters!r} is not valid; it must be an integer >= 1")
+    if not (np.isfinite(rotation_hz) and rotation_hz > 0):
+        raise ValueError(f"rotation_hz = {rotation_hz!r} is not valid; it must be > 0 Hz")
+    return float(n_lifters) * float(rotation_hz)
+
+
+@dataclass(frozen=True)
+class Peak:
+    """A spectral line: ``frequency_hz`` (Hz, refined between bins) and ``amplitude`` (N m)."""
+
+    frequency_hz: float
+    amplitude: float
+
+
+def find_peak(data: Samples, near_hz: float, *, search_hz: float | None = None,
+              window: WindowName = "hann", sample_rate_hz: float | None = None) -> Peak:
+    """Locate the largest line within ``near_hz +- search_hz`` and refine it between bins.
+
+    Real mills drift in speed, so the LTH and drive lines are searched near where they are
+    expected. The refinement maximises the windowed DTFT of the block (mean removed) between the
+    neighbouring bins, which is exact for a lone sinusoid whatever the window.
+
+    Parameters
+    ----------
+    near_hz : float
+        Expected frequency, Hz.
+    search_hz : float, optional
+        Half-width of the search range, Hz; default 3 bins (3/TR).
+    """
+    _check_window(window)
+    x, fs = _samples(data, sample_rate_hz)
+    if search_hz is None:
+        search_hz = 3.0 * fs / x.size
+    p = _core.find_peak(x, fs, window, float(near_hz), float(search_hz))
+    return Peak(frequency_hz=p.frequency_hz, amplitude=p.amplitude)
+
+
+@dataclass(frozen=True)
+class SpectralEnergy:
+    """Energy of a filtered block, eq. (11), with what the filter did.
+
+    Attributes
+    ----------
+    energy : float
+        E = integral of |x(t)|^2 dt over the block after removal, (N m)^2 s.
+    fraction_kept : float
+        Share of the two-sided band 0 .. fs kept by the filter; white noise of variance s^2 gives
+        about s^2 TR fraction_kept.
+    removed_hz : tuple of (float, float)
+        The removed bands as (low, high), Hz.
+    half_width_hz : float
+        Half-width of each removed band, Hz.
+    widened : bool
+        True when the requested bandwidth was narrower than the window's main lobe and was
+        widened to it (Hann: +-2/TR).
+    window : str
+    record_length_s : float
+        TR, s.
+    """
+
+    energy: float
+    fraction_kept: float
+    removed_hz: tuple[tuple[float, float], ...]
+    half_width_hz: float
+    widened: bool
+    window: str
+    record_length_s: float
+
+    def __float__(self) -> float:
+        return self.energy
+
+
+def _mask(x: NDArray[np.float64], fs: float, window: str, remove: Iterable[RemoveItem],
+          bandwidth: float, band: tuple[float, float] | None, track_hz: float
+          ) -> _core.BandMask:
+    remove_mean = False
+    lines: list[float] = []
+    for item in remove:
+        if isinstance(item, str):
+            if item != "mean":
+                raise ValueError(f"remove: {item!r} is not known; give 'mean' or frequencies in Hz")
+            remove_mean = True
+        else:
+            f = float(item)
+            if track_hz > 0:
+                f = _core.find_peak(x, fs, window, f, float(track_hz)).frequency_hz
+            lines.append(f)
+    lo, hi = band if band is not None else (0.0, fs / 2)
+    return _core.band_mask(x.size, fs, window, remove_mean, lines, float(bandwidth),
+                           float(lo), float(hi))
+
+
+def spectral_energy(data: Samples, remove: Sequence[RemoveItem] = ("mean",), *,
+                    bandwidth: float = 0.3, window: WindowName = "hann",
+                    band: tuple[float, float] | None = None, track_hz: float = 0.0,
+                    sample_rate_hz: float | None = None,
+                    resolution_hz: float | None = None) -> SpectralEnergy:
+    """Energy of the block after removing the mean and spectral lines (eq. 11).
+
+    Evaluated by Parseval on the windowed spectrum with the window's power corrected
+    (DESIGN.md section 4): E = dt sum_{kept k} |X_k|^2 / sum(w^2), over two-sided bins.
+
+    Parameters
+    ----------
+    remove : sequence of "mean" or float
+        What to take out: ``"mean"`` (a band at 0 Hz) and line frequencies in Hz (the LTH,
+        drive-train lines).
+    bandwidth : float
+        Full width of each removed band, Hz; widened to the window's main lobe when narrower
+        (the result's ``widened`` says so).
+    band : (float, float), optional
+        Count only bins in [low, high] Hz; default 0 .. Nyquist.
+    track_hz : float
+        If > 0, re-centre each line on the largest peak within +- track_hz before removing it
+        (real mills drift in speed).
+    resolution_hz : float, optional
+        If given, refuse a block too short to resolve it (eq. 9).
+    """
+    _check_window(window)
+    x, fs = _samples(data, sample_rate_hz)
+    _check_resolution(x.size, fs, resolution_hz)
+    mask = _mask(x, fs, window, remove, bandwidth, band, track_hz)
+    h = mask.half_width_hz
+    return SpectralEnergy(
+        energy=_core.spectral_energy(x, fs, window, mask),
+        fraction_kept=mask.fraction_kept,
+        removed_hz=tuple((max(0.0, c - h), c + h) for c in mask.centres_hz),
+        half_width_hz=h,
+        widened=mask.widened,
+        window=window,
+        record_length_s=x.size / fs,
+    )
+
+
+def band_stop(data: TorqueRecord, remove: Sequence[RemoveItem] = ("mean",), *,
+              bandwidth: float = 0.3, window: WindowName = "hann",
+              band: tuple[float, float] | None = None, track_hz: float = 0.0) -> TorqueRecord:
+    """The filtered block in the time domain, as a record.
+
+    It is the inverse FFT of the kept bins of the windowed spectrum, divided by the square root of
+    the window's power gain, so that its energy ``sum(y**2) * dt`` equals
+    :func:`spectral_energy` with the same arguments. With ``window="rectangular"`` it is the
+    plain band-stopped signal; with a Hann window it carries the window's taper.
+    """
+    _check_window(window)
+    x, fs = _samples(data, None)
+    mask = _mask(x, fs, window, remove, bandwidth, band, track_hz)
+    y = _core.band_stop(x, window, mask)
+    return TorqueRecord(data.time_s, y, {**data.meta, "filtered": {
+        "removed": [r if isinstance(r, str) else float(r) for r in remove],
+        "half_width_hz": mask.half_width_hz, "window": window}})
