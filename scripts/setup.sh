@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 extras=""
-[ "${1:-}" = "--test" ] && extras="[test,notebooks,dask]"
+[ "${1:-}" = "--test" ] && extras="[test]"
 
 system_packages=(g++ cmake pkg-config libeigen3-dev libfftw3-dev)
 missing=()

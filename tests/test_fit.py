@@ -103,7 +103,8 @@ def test_calibration_round_trip_and_damaged_files(tmp_path, calibration) -> None
     rec = synthetic_record(2.0, seed=5).block(4, 14)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideCalibrationWarning)
-        assert ms.estimate_fill(rec, ms.Calibration.load(path)) == ms.estimate_fill(rec, calibration)
+        reloaded = ms.Calibration.load(path)
+        assert ms.estimate_fill(rec, reloaded) == ms.estimate_fill(rec, calibration)
     bad = tmp_path / "bad.json"
     bad.write_text("{")
     with pytest.raises(ValueError, match="not valid JSON"):

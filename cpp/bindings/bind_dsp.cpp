@@ -35,6 +35,10 @@ void register_dsp(py::module_& m) {
       .def_readonly("centres_hz", &d::BandMask::centres_hz)
       .def_readonly("subtract_mean", &d::BandMask::subtract_mean);
 
+  py::class_<d::EnergyEstimate>(m, "EnergyEstimate")
+      .def_readonly("energy", &d::EnergyEstimate::energy)
+      .def_readonly("relative_std", &d::EnergyEstimate::relative_std);
+
   m.def("fftw_version", &d::fftw_version);
 
   m.def(

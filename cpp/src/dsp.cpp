@@ -328,15 +328,28 @@ std::vector<cplx> masked_spectrum(const double* x, std::size_t n, Window window,
 }
 }  // namespace
 
-double spectral_energy(const double* x, std::size_t n, double fs, Window window,
-                       const BandMask& mask) {
+EnergyEstimate spectral_energy(const double* x, std::size_t n, double fs, Window window,
+                               const BandMask& mask) {
   require_block(n, fs);
   const auto X = masked_spectrum(x, n, window, mask);
-  double sum_w_sq = 0.0;
-  for (double v : window_samples(window, n)) sum_w_sq += v * v;
-  double two_sided = 0.0;
-  for (std::size_t k = 0; k < X.size(); ++k) two_sided += two_sided_weight(k, n) * std::norm(X[k]);
-  return two_sided / (fs * sum_w_sq);  // eq. (11) by Parseval, window power corrected
+  double sum_w2 = 0.0, sum_w4 = 0.0;
+  for (double v : window_samples(window, n)) {
+    sum_w2 += v * v;
+    sum_w4 += v * v * v * v;
+  }
+  double two_sided = 0.0, single = 0.0, single_sq = 0.0;
+  for (std::size_t k = 0; k < X.size(); ++k) {
+    const double p = std::norm(X[k]);
+    two_sided += two_sided_weight(k, n) * p;
+    single += p;
+    single_sq += p * p;
+  }
+  const double c_w = static_cast<double>(n) * sum_w4 / (sum_w2 * sum_w2);
+  // |X_k|^2 of Gaussian noise is exponential, E[P^2] = 2 E[P]^2: half the sum of P_k^2
+  // estimates sum (E P_k)^2.
+  const double relative_std = single > 0.0 ? std::sqrt(c_w * single_sq / 2.0) / single : 0.0;
+  return EnergyEstimate{two_sided / (fs * sum_w2),  // eq. (11) by Parseval, window power corrected
+                        relative_std};
 }
 
 std::vector<double> band_stop(const double* x, std::size_t n, Window window,

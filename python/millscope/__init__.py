@@ -3,6 +3,10 @@
 The public API (DESIGN.md section 5) is re-exported here; submodules hold the details.
 """
 
+from importlib import import_module as _import_module
+from typing import Any as _Any
+
+from . import drivetrain
 from ._core import build_info as _build_info
 from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
 from .record import RecordError, TorqueRecord
@@ -20,6 +24,14 @@ from .spectral import (
 
 __version__: str = _build_info()["version"]
 
+_LAZY_SUBMODULES = ("plots",)  # matplotlib is imported only when figures are asked for
+
+
+def __getattr__(name: str) -> _Any:
+    if name in _LAZY_SUBMODULES:
+        return _import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'millscope' has no attribute {name!r}")
+
 __all__ = [
     "Calibration",
     "FillEstimate",
@@ -31,10 +43,12 @@ __all__ = [
     "TorqueRecord",
     "__version__",
     "band_stop",
+    "drivetrain",
     "estimate_fill",
     "find_peak",
     "lifter_harmonic_hz",
     "log_fit",
+    "plots",
     "spectral_energy",
     "spectrum",
     "window_factors",

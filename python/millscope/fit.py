@@ -79,14 +79,21 @@ class LogFit:
         result = np.exp((np.asarray(y, dtype=np.float64) - self.b) / self.a)
         return float(result) if np.ndim(result) == 0 else result
 
-    def prediction_half_width(self, x: float, confidence: float = 0.95) -> float:
-        """Half-width of the prediction interval of a new y at x (units of y)."""
+    def prediction_half_width(self, x: float, confidence: float = 0.95,
+                              observation_std: float = 0.0) -> float:
+        """Half-width of the prediction interval of a new y at x (units of y).
+
+        The new observation's own scatter is the larger of the fit's residual standard
+        deviation and ``observation_std`` (what the new y is known to scatter by, e.g. the
+        sampling spread of its energy): a fit through few points can underestimate it.
+        """
         if self.n < 3 or not np.isfinite(self.residual_std):
             return math.nan
         t = stats.t.ppf(0.5 + confidence / 2, self.n - 2)
         u = math.log(x)
-        return float(t * self.residual_std *
-                     math.sqrt(1 + 1 / self.n + (u - self.ln_x_mean) ** 2 / self.ln_x_sxx))
+        mean_var = self.residual_std**2 * (1 / self.n + (u - self.ln_x_mean) ** 2 / self.ln_x_sxx)
+        new_var = max(self.residual_std, observation_std) ** 2
+        return float(t * math.sqrt(mean_var + new_var))
 
     def equation(self) -> str:
         """The fit as the paper writes it, e.g. ``y = -0.423 ln(x) + 0.9279``."""
@@ -184,7 +191,8 @@ class Calibration:
             raise ValueError(f"Calibration.reference_energy = {self.reference_energy!r} is not "
                              "valid; it must be finite and > 0 (N m)^2 s")
         if self.block_s <= 0:
-            raise ValueError(f"Calibration.block_s = {self.block_s!r} is not valid; it must be > 0 s")
+            raise ValueError(f"Calibration.block_s = {self.block_s!r} is not valid; "
+                             "it must be > 0 s")
         lifter_harmonic_hz(self.lifters, self.rotation_hz)  # validates both
 
     @property
@@ -237,18 +245,22 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
     """Estimate the load level of the mill from a torque block, x = exp((y - b)/a).
 
     The block is analysed as the calibration was made: the same window and bandwidth, the mean,
-    the LTH and the extra lines removed. Its length must match ``calibration.block_s`` within one
-    sample, since energy grows with the block length. Warns with
+    the LTH and the extra lines removed. Its length must match ``calibration.block_s`` within
+    one sample, since energy grows with the block length. The interval is the fit's prediction
+    interval, with the new energy's scatter taken as the larger of the fit's residuals and the
+    block's own sampling spread (:attr:`SpectralEnergy.relative_std`). Warns with
     :class:`OutsideCalibrationWarning` outside the calibrated range.
     """
     cal = calibration
     if abs(record.duration_s - cal.block_s) > record.dt * 1.5:
         raise ValueError(f"record is {record.duration_s:g} s long but the calibration was made "
                          f"on blocks of block_s = {cal.block_s:g} s; pass a block of that length")
-    e = spectral_energy(record, cal.remove, bandwidth=cal.bandwidth, window=cal.window)  # type: ignore[arg-type]
+    e = spectral_energy(record, cal.remove, bandwidth=cal.bandwidth,
+                        window=cal.window)  # type: ignore[arg-type]
     y = e.energy / cal.reference_energy
     level = cal.fit.inverse(y)
-    half = cal.fit.prediction_half_width(float(level), confidence)
+    half = cal.fit.prediction_half_width(float(level), confidence,
+                                         observation_std=y * e.relative_std)
     if math.isfinite(half):
         bounds = sorted(float(cal.fit.inverse(y + s * half)) for s in (-1, 1))
         interval = (bounds[0], bounds[1])

@@ -66,8 +66,9 @@ def _check_samples(time_s: NDArray[np.float64], torque: NDArray[np.float64], uni
     worst = int(np.argmax(deviation))
     if deviation[worst] > uniform_rtol * dt:
         raise RecordError(
-            f"{where}: sampling is not uniform: step {worst + 1} is {float(steps[worst])!r} s against a "
-            f"mean step of {float(dt)!r} s (allowed deviation uniform_rtol = {uniform_rtol:g} relative); "
+            f"{where}: sampling is not uniform: step {worst + 1} is {float(steps[worst])!r} s "
+            f"against a mean step of {float(dt)!r} s (allowed deviation uniform_rtol = "
+            f"{uniform_rtol:g} relative); "
             "resample the record first")
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Literal, Union
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,8 +35,8 @@ __all__ = [
 ]
 
 WindowName = Literal["hann", "hann_periodic", "rectangular"]
-Samples = Union[TorqueRecord, ArrayLike]
-RemoveItem = Union[Literal["mean"], float]
+Samples = TorqueRecord | ArrayLike
+RemoveItem = Literal["mean"] | float
 
 _WINDOWS = ("hann", "hann_periodic", "rectangular")
 
@@ -194,6 +194,10 @@ class SpectralEnergy:
     ----------
     energy : float
         E = integral of |x(t)|^2 dt over the block after removal, (N m)^2 s.
+    relative_std : float
+        Sampling spread of ``energy`` (standard deviation over mean) for a Gaussian signal whose
+        spectrum is smooth over a main lobe; about 2/sqrt(N) for white noise and a Hann window.
+        Lines left in the kept band make it larger.
     fraction_kept : float
         Share of the two-sided band 0 .. fs kept by the filter; white noise of variance s^2 gives
         about s^2 TR fraction_kept.
@@ -210,6 +214,7 @@ class SpectralEnergy:
     """
 
     energy: float
+    relative_std: float
     fraction_kept: float
     removed_hz: tuple[tuple[float, float], ...]
     half_width_hz: float
@@ -272,8 +277,10 @@ def spectral_energy(data: Samples, remove: Sequence[RemoveItem] = ("mean",), *,
     _check_resolution(x.size, fs, resolution_hz)
     mask = _mask(x, fs, window, remove, bandwidth, band, track_hz)
     h = mask.half_width_hz
+    estimate = _core.spectral_energy(x, fs, window, mask)
     return SpectralEnergy(
-        energy=_core.spectral_energy(x, fs, window, mask),
+        energy=estimate.energy,
+        relative_std=estimate.relative_std,
         fraction_kept=mask.fraction_kept,
         removed_hz=tuple((max(0.0, c - h), c + h) for c in mask.centres_hz),
         half_width_hz=h,

@@ -85,12 +85,24 @@ BandMask band_mask(std::size_t n, double fs, Window window, bool remove_mean,
                    const std::vector<double>& lines_hz, double bandwidth_hz, double band_lo_hz,
                    double band_hi_hz);
 
+/// Energy of a filtered block and its sampling spread.
+struct EnergyEstimate {
+  double energy;        // unit^2 s
+  double relative_std;  // standard deviation of the estimate over its mean, for a Gaussian
+                        // signal whose spectrum is smooth across a main lobe
+};
+
 /// Energy of the filtered block, E = integral |x(t)|^2 dt (eq. 11), evaluated by Parseval on
 /// the windowed spectrum with the window's power corrected:
 ///   E = (1/fs) sum_{kept, two-sided k} |X_k|^2 / sum(w^2).
 /// White noise of variance s^2 gives on average s^2 TR fraction_kept. Units: unit^2 s.
-double spectral_energy(const double* x, std::size_t n, double fs, Window window,
-                       const BandMask& mask);
+/// The spread: neighbouring bins of a windowed spectrum are correlated, and summing the
+/// correlations over all lags gives, by Parseval on w^2, the factor c_w = N sum(w^4)/sum(w^2)^2
+/// (1 rectangular, 35/18 Hann), so relative_std^2 = c_w sum_k (E P_k)^2 / (sum_k P_k)^2 over
+/// the kept single-sided bins with P_k = |X_k|^2, where sum (E P_k)^2 is estimated by
+/// sum P_k^2 / 2 (P_k of Gaussian noise is exponentially distributed).
+EnergyEstimate spectral_energy(const double* x, std::size_t n, double fs, Window window,
+                               const BandMask& mask);
 
 /// The filtered block in the time domain: the inverse FFT of the kept bins of the windowed
 /// spectrum, divided by sqrt(power gain) so that sum(y^2) / fs equals spectral_energy.

@@ -1,0 +1,102 @@
+"""The command line as a user runs it: output, plots, and one clear line for bad input."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from millscope.cli import main
+from millscope.synthetic import SyntheticTorque, synthetic_record
+
+
+@pytest.fixture
+def csv_record(tmp_path):
+    content = SyntheticTorque(rotation_hz=0.55)
+    path = tmp_path / "mill.csv"
+    synthetic_record(2, content=content, seed=4).to_csv(path)
+    return path
+
+
+def test_info_runs_as_a_module() -> None:
+    out = subprocess.run([sys.executable, "-m", "millscope", "info"], capture_output=True,
+                         text=True, check=True).stdout
+    assert "FFTW" in out and "fftw-3" in out and "OpenMP" in out and "threads" in out
+
+
+def test_analyze_prints_the_figures_and_writes_plots(csv_record, tmp_path, capsys) -> None:
+    out_dir = tmp_path / "plots"
+    code = main(["analyze", str(csv_record), "--lifters", "16", "--rotation-hz", "0.55",
+                 "--from", "4", "--to", "14", "--resolution", "0.1", "--out", str(out_dir)])
+    text = capsys.readouterr().out
+    assert code == 0
+    lth_line = next(line for line in text.splitlines() if line.startswith("LTH found"))
+    assert float(lth_line.split()[2]) == pytest.approx(16 * 0.55, abs=0.02)
+    assert "mean torque" in text and "spectral energy" in text
+    for name in ("mill_spectrum.png", "mill_filtered.png"):
+        assert (out_dir / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_analyze_removes_drive_lines_and_decimates(tmp_path, capsys) -> None:
+    """A 1 kHz record with a 23.1 Hz motor line: decimated to 100 Hz, the line removed."""
+    content = SyntheticTorque(rotation_hz=0.61, noise_std_Nm=5.0, lines=((23.1, 40.0),))
+    path = tmp_path / "measured.csv"
+    synthetic_record(2, content=content, sample_rate_hz=1000.0, duration_s=12.0).to_csv(path)
+    drive = tmp_path / "drive.json"
+    drive.write_text('{"motor": {"pole_pairs": 2, "speed_hz": 23.1}, '
+                     '"stages": [{"ratio": 37.8688524590164}], "lifters": 16}')
+    args = ["analyze", str(path), "--lifters", "16", "--rotation-hz", "0.61", "--from", "1",
+            "--to", "11", "--out", str(tmp_path)]
+    assert main(args) == 0
+    plain = capsys.readouterr().out
+    assert main([*args, "--drive", str(drive)]) == 0
+    with_drive = capsys.readouterr().out
+    assert "decimated from 1000 Hz to 100 Hz" in with_drive
+
+    def energy(text: str) -> float:
+        return float(next(x for x in text.splitlines() if x.startswith("spectral")).split()[2])
+
+    # white noise at 1 kHz keeps a tenth of its power in the 0-50 Hz band left by decimation
+    noise_level = 5.0**2 * (-0.454 * np.log(2) + 0.9987) * 10.0 * (50.0 / 500.0)
+    assert energy(with_drive) == pytest.approx(noise_level, rel=0.25)
+    assert energy(plain) > 10 * noise_level  # the 40 N m motor line dominates when kept
+
+
+@pytest.mark.parametrize(
+    ("content", "extra", "message"),
+    [
+        ("time_s,torque\n0,1\n0.01,2\n", [], "missing column 'torque_Nm'"),
+        ("time_s,torque_Nm\n0,1\n0.01,x\n", [], "'x' is not a number"),
+        ("time_s,torque_Nm\n0,1\n0.01,nan\n0.02,1\n", [], "is not finite"),
+        ("time_s,torque_Nm\n0,1\n0.01,2\n0.03,1\n", [], "sampling is not uniform"),
+        ("time_s,torque_Nm\n0,1\n0.02,2\n0.01,1\n", [], "not strictly increasing"),
+        (None, ["--resolution", "0.1", "--to", "5"], "coarser than the asked resolution_hz = 0.1"),
+        (None, ["--from", "50", "--to", "60"], "holds 0 samples"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(tmp_path, csv_record, capsys, content, extra,
+                                          message: str) -> None:
+    path = csv_record
+    if content is not None:
+        path = tmp_path / "bad.csv"
+        path.write_text(content)
+    code = main(["analyze", str(path), "--lifters", "16", "--rotation-hz", "0.55", "--out",
+                 str(tmp_path), *extra])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("millscope: error: ") and message in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_bad_options_exit_2_without_traceback(csv_record) -> None:
+    run = subprocess.run([sys.executable, "-m", "millscope", "analyze", str(csv_record),
+                          "--lifters", "0", "--rotation-hz", "0.5"], capture_output=True, text=True)
+    assert run.returncode == 2
+    assert "--lifters: '0' is not valid; it must be >= 1" in run.stderr
+    assert "Traceback" not in run.stderr
+    run = subprocess.run([sys.executable, "-m", "millscope", "analyze", "/no/such.csv",
+                          "--lifters", "16", "--rotation-hz", "0.5"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "no such file" in run.stderr
