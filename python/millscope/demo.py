@@ -15,7 +15,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from . import plots
-from ._atomic import atomic_write
+from ._files import atomic_write
 from .analysis import analyze_block
 from .fit import Calibration, estimate_fill, log_fit, per_unit
 from .spectral import band_stop, spectrum

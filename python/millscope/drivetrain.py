@@ -22,17 +22,17 @@ mesh line is known. The motor gives ``supply_hz`` (with ``slip``) or ``speed_hz`
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass
 from fractions import Fraction
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import scipy.signal as ss
 from numpy.typing import NDArray
+
+from ._files import read_json
 
 __all__ = ["Motor", "GearStage", "DriveTrain", "InterferenceLine", "decimate"]
 
@@ -248,14 +248,7 @@ class DriveTrain:
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> DriveTrain:
         """Read a ``drive.json``."""
-        source = Path(path)
-        try:
-            data = json.loads(source.read_text())
-        except FileNotFoundError:
-            raise ValueError(f"{source}: no such drive file") from None
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{source}: not valid JSON ({exc})") from None
-        return cls.from_dict(data, str(source))
+        return cls.from_dict(read_json(path, "drive"), str(path))
 
 
 def decimate(time_s: NDArray[np.float64], torque: NDArray[np.float64], target_hz: float

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
-from ._atomic import atomic_write
+from ._files import atomic_write, read_json
 from .record import TorqueRecord
 from .spectral import lifter_harmonic_hz, spectral_energy
 
@@ -212,12 +212,7 @@ class Calibration:
     def load(cls, path: str | os.PathLike[str]) -> Calibration:
         """Read a calibration written by :meth:`save`; a damaged file raises ValueError."""
         source = Path(path)
-        try:
-            data = json.loads(source.read_text())
-        except FileNotFoundError:
-            raise ValueError(f"{source}: no such calibration file") from None
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{source}: not valid JSON ({exc})") from None
+        data = read_json(source, "calibration")
         if not isinstance(data, dict) or data.pop("format", None) != CALIBRATION_FORMAT:
             raise ValueError(f"{source}: not a millscope calibration (expected format "
                              f"{CALIBRATION_FORMAT!r})")

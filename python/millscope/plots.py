@@ -16,7 +16,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
-from ._atomic import atomic_write
+from ._files import atomic_write
 from .fit import LogFit
 from .record import TorqueRecord
 from .spectral import Spectrum

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._atomic import atomic_write
+from ._files import atomic_write
 
 __all__ = ["TorqueRecord", "RecordError"]
 

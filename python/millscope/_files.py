@@ -1,13 +1,15 @@
-"""Atomic file writes: a temporary file beside the target, then ``os.replace``."""
+"""File helpers: atomic writes (a temporary file beside the target, then ``os.replace``) and
+JSON reads whose errors name the file."""
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 
 @contextlib.contextmanager
@@ -29,3 +31,15 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def read_json(path: str | os.PathLike[str], what: str) -> Any:
+    """The parsed JSON of ``path``; a missing or malformed file raises ValueError naming the file
+    and ``what`` it should have been (e.g. "calibration")."""
+    source = Path(path)
+    try:
+        return json.loads(source.read_text())
+    except FileNotFoundError:
+        raise ValueError(f"{source}: no such {what} file") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{source}: not valid JSON ({exc})") from None
