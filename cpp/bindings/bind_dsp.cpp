@@ -61,20 +61,21 @@ void register_dsp(py::module_& m) {
       arg("fs"));
 
   m.def(
-      "spectrum",
-      [](const InArray& x, double fs, const std::string& window, const std::string& scaling) {
+      "spectra",
+      [](const InArray& x, double fs, const std::string& window) {
         const double* p = data_1d(x, "x");
         const auto n = static_cast<std::size_t>(x.shape(0));
         const auto w = d::window_from_name(window);
-        const auto s = d::scaling_from_name(scaling);
-        std::vector<double> out;
+        d::Spectra s;
         {
           py::gil_scoped_release release;
-          out = d::spectrum(p, n, fs, w, s);
+          s = d::spectra(p, n, fs, w);
         }
-        return to_numpy(std::move(out));
+        return py::make_tuple(to_numpy(std::move(s.amplitude)), to_numpy(std::move(s.power)),
+                              to_numpy(std::move(s.psd)));
       },
-      arg("x"), arg("fs"), arg("window"), arg("scaling"));
+      arg("x"), arg("fs"), arg("window"),
+      "(amplitude, power, psd) of the windowed block, single-sided, from one FFT");
 
   m.def(
       "find_peak",

@@ -137,14 +137,6 @@ std::string window_name(Window window) {
   return "?";
 }
 
-Scaling scaling_from_name(const std::string& name) {
-  if (name == "amplitude") return Scaling::amplitude;
-  if (name == "power" || name == "spectrum") return Scaling::power;
-  if (name == "psd" || name == "density") return Scaling::psd;
-  throw std::invalid_argument("scaling = '" + name +
-                              "' is not known; use 'amplitude', 'power' or 'psd'");
-}
-
 std::vector<double> window_samples(Window window, std::size_t n) {
   std::vector<double> w(n, 1.0);
   if (window == Window::rectangular || n < 2) return w;
@@ -181,8 +173,7 @@ std::vector<cplx> windowed_rfft(const double* x, std::size_t n, Window window) {
   return rfft_of_windowed(x, n, window, 0.0);
 }
 
-std::vector<double> spectrum(const double* x, std::size_t n, double fs, Window window,
-                             Scaling scaling) {
+Spectra spectra(const double* x, std::size_t n, double fs, Window window) {
   require_block(n, fs);
   const auto X = rfft_of_windowed(x, n, window, 0.0);
   const auto w = window_samples(window, n);
@@ -191,15 +182,14 @@ std::vector<double> spectrum(const double* x, std::size_t n, double fs, Window w
     sum += v;
     sum_sq += v * v;
   }
-  std::vector<double> s(X.size());
+  Spectra s{std::vector<double>(X.size()), std::vector<double>(X.size()),
+            std::vector<double>(X.size())};
   for (std::size_t k = 0; k < X.size(); ++k) {
     const double mag2 = std::norm(X[k]);
     const double weight = two_sided_weight(k, n);
-    switch (scaling) {
-      case Scaling::amplitude: s[k] = weight * std::sqrt(mag2) / sum; break;
-      case Scaling::power: s[k] = weight * mag2 / (sum * sum); break;
-      case Scaling::psd: s[k] = weight * mag2 / (fs * sum_sq); break;
-    }
+    s.amplitude[k] = weight * std::sqrt(mag2) / sum;
+    s.power[k] = weight * mag2 / (sum * sum);
+    s.psd[k] = weight * mag2 / (fs * sum_sq);
   }
   return s;
 }

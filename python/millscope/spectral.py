@@ -127,11 +127,12 @@ def spectrum(data: Samples, *, window: WindowName = "hann", sample_rate_hz: floa
     _check_window(window)
     x, fs = _samples(data, sample_rate_hz)
     _check_resolution(x.size, fs, resolution_hz)
+    amplitude, power, psd = _core.spectra(x, fs, window)
     return Spectrum(
         freq=_core.bin_frequencies(x.size, fs),
-        amplitude=_core.spectrum(x, fs, window, "amplitude"),
-        psd=_core.spectrum(x, fs, window, "psd"),
-        power=_core.spectrum(x, fs, window, "power"),
+        amplitude=amplitude,
+        psd=psd,
+        power=power,
         window=window,
         resolution_hz=fs / x.size,
     )

@@ -36,14 +36,14 @@ struct WindowFactors {
 };
 WindowFactors window_factors(Window window, std::size_t n);
 
-/// Single-sided scalings of |X_k|^2; power and psd match scipy.signal.periodogram's
-/// scaling="spectrum" and scaling="density".
-enum class Scaling {
-  amplitude,  // 2|X_k| / sum(w) (1 |X_k| / sum(w) at DC and Nyquist): a sinusoid of amplitude A reads A
-  power,      // squared RMS per bin, 2|X_k|^2 / sum(w)^2 (unit^2)
-  psd,        // power spectral density, 2|X_k|^2 / (fs sum(w^2)) (unit^2 / Hz)
+/// Single-sided spectra of one windowed block, k = 0 .. N/2; power and psd match
+/// scipy.signal.periodogram's scaling="spectrum" and scaling="density".
+struct Spectra {
+  std::vector<double> amplitude;  // 2|X_k| / sum(w) (|X_k| / sum(w) at DC and Nyquist): a
+                                  // sinusoid of amplitude A reads A
+  std::vector<double> power;      // squared RMS per bin, 2|X_k|^2 / sum(w)^2 (unit^2)
+  std::vector<double> psd;        // power spectral density, 2|X_k|^2 / (fs sum(w^2)) (unit^2/Hz)
 };
-Scaling scaling_from_name(const std::string& name);
 
 /// Frequencies of the N/2 + 1 single-sided bins, k fs / N, in Hz.
 std::vector<double> bin_frequencies(std::size_t n, double fs);
@@ -51,9 +51,8 @@ std::vector<double> bin_frequencies(std::size_t n, double fs);
 /// The single-sided FFT X_k (k = 0 .. N/2) of the windowed block.
 std::vector<cplx> windowed_rfft(const double* x, std::size_t n, Window window);
 
-/// Single-sided spectrum of the windowed block in the asked scaling.
-std::vector<double> spectrum(const double* x, std::size_t n, double fs, Window window,
-                             Scaling scaling);
+/// The three single-sided scalings of the windowed block, from one FFT.
+Spectra spectra(const double* x, std::size_t n, double fs, Window window);
 
 /// A spectral line located near an expected frequency.
 struct Peak {
