@@ -125,3 +125,12 @@ def test_failed_write_keeps_the_old_file(tmp_path, monkeypatch) -> None:
         make(80).save(path)
     assert path.read_bytes() == before
     assert sorted(os.listdir(tmp_path)) == ["r.npz"]
+
+
+def test_written_files_follow_the_umask_not_mkstemp(tmp_path) -> None:
+    old = os.umask(0o022)
+    try:
+        path = make().save(tmp_path / "r.npz")
+    finally:
+        os.umask(old)
+    assert path.stat().st_mode & 0o777 == 0o644

@@ -12,15 +12,25 @@ from pathlib import Path
 from typing import IO, Any
 
 
+def _new_file_mode() -> int:
+    """0o666 less the process umask, the mode ``open()`` would give a new file."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
 @contextlib.contextmanager
 def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
     """Open a temporary file beside ``path``; on success rename it over ``path``.
 
     On any error the temporary file is removed and ``path`` is left as it was, so a reader never
-    sees a half-written file.
+    sees a half-written file. The result has the mode an ordinary ``open()`` would give it (the
+    old file's mode when replacing one), not mkstemp's private 0600.
     """
     target = Path(path)
+    permissions = target.stat().st_mode & 0o7777 if target.exists() else _new_file_mode()
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    os.chmod(tmp, permissions)
     try:
         with os.fdopen(fd, mode) as fh:
             yield fh

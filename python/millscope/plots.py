@@ -1,8 +1,15 @@
-"""Figures of the paper's section 6. Every function returns a matplotlib Figure.
+"""Figures of the paper's section 6 (Figs. 2, 10, 12-15). Every function returns a Figure.
 
-Figures are built with :class:`matplotlib.figure.Figure` directly, not pyplot, so they hold no
-global state, work headless and show in Jupyter when returned as a cell's value. Nothing here
-calls ``show()``.
+Figures are built with :class:`matplotlib.figure.Figure` directly, never through pyplot, so they
+hold no global state (nothing to close, nothing leaks), work headless without choosing a backend,
+and show in Jupyter when returned as a cell's value. Nothing here calls ``show()``.
+
+Functions that draw on a single axes take ``ax=None``: given an Axes, they draw into it (for
+panels of a larger figure, as in Fig. 10 a-g) and return the figure that holds it. Titles and
+labels are set only when the function made the figure or when they are passed explicitly.
+
+Units: time in s, frequency in Hz, torque and spectral amplitude in N m; energies are shown per
+unit of the group's largest energy (DESIGN.md section 4).
 """
 
 from __future__ import annotations
@@ -10,11 +17,12 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any, Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from ._files import atomic_write
 from .fit import LogFit
@@ -24,168 +32,497 @@ from .spectral import Spectrum
 __all__ = ["plot_torque", "plot_spectrum", "plot_filtered", "plot_waterfall",
            "plot_energy_fit", "plot_energy_fits", "save_figure"]
 
-LineSpec = float | tuple[str, float]
+
+class _NamedLine(Protocol):
+    """Anything with a name and a frequency, e.g. :class:`millscope.drivetrain.InterferenceLine`."""
+
+    name: str
+    frequency_hz: float
 
 
-def _axes(ax: Axes | None, size: tuple[float, float] = (8.0, 4.0)) -> tuple[Figure, Axes]:
+LineSpec = float | tuple[str, float] | _NamedLine
+
+_GRID = {"alpha": 0.35, "lw": 0.6}
+_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "<", ">")
+_LTH_COLOR = "tab:red"
+_LINE_COLOR = "0.45"
+
+
+# -- helpers -------------------------------------------------------------------------------
+def _axes(ax: Axes | None, size: tuple[float, float]) -> tuple[Figure, Axes, bool]:
+    """(figure, axes, made): a new constrained-layout figure unless ``ax`` is given."""
     if ax is not None:
-        fig = ax.get_figure()
-        assert isinstance(fig, Figure)
-        return fig, ax
+        fig: Any = ax.figure
+        while not isinstance(fig, Figure):  # an Axes in a SubFigure: return the root figure
+            fig = fig.figure
+        return fig, ax, False
     fig = Figure(figsize=size, layout="constrained")
-    return fig, fig.add_subplot()
+    return fig, fig.add_subplot(), True
 
 
-def _without_mean_lobe(spec: Spectrum, fmax_hz: float | None
-                       ) -> tuple[np.ndarray, np.ndarray]:
-    """Frequencies and amplitudes past the main lobe of the 0 Hz line (the mean torque), which
-    would otherwise flatten the plot: Hann leaks the mean into the bins up to 2/TR."""
-    lobe_bins = 1 if spec.window == "rectangular" else 2
-    keep = spec.freq > lobe_bins * spec.resolution_hz * (1 + 1e-9)
+# Highest bin the mean (a 0 Hz line) leaks into, per window. Hann's coherent-gain-corrected
+# spectrum reads the mean at full height in bin 1 as well. The symmetric Hann (eq. 10) is not
+# exactly periodic in the block, so bin 2, its main-lobe edge, still holds about 0.7 mean / N
+# (1.2 N m for a 265 N m mean over 150 samples; less beyond). Periodic Hann has a null there,
+# and the rectangular window leaks a constant into no other bin.
+_MEAN_LOBE_BINS = {"hann": 2, "hann_periodic": 1, "rectangular": 0}
+
+
+def _mean_lobe_hz(spec: Spectrum) -> float:
+    """Upper edge of the bins the mean torque leaks into (the 0 Hz line's main lobe), Hz."""
+    return _MEAN_LOBE_BINS.get(spec.window, 2) * spec.resolution_hz * (1 + 1e-9)
+
+
+def _spectrum_part(spec: Spectrum, fmax_hz: float | None
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Frequencies and amplitudes past the mean's main lobe, up to ``fmax_hz``."""
+    freq = np.asarray(spec.freq)
+    amp = np.asarray(spec.amplitude)
+    if freq.shape != amp.shape or freq.ndim != 1:
+        raise ValueError(f"spec.freq has shape {freq.shape} but spec.amplitude has {amp.shape}; "
+                         "they must be 1-D of equal length")
+    keep = freq > _mean_lobe_hz(spec)  # the 0 Hz bin always goes
     if fmax_hz is not None:
-        keep &= spec.freq <= fmax_hz
-    return spec.freq[keep], spec.amplitude[keep]
+        if not (np.isfinite(fmax_hz) and fmax_hz > 0):
+            raise ValueError(f"fmax_hz = {fmax_hz!r} is not valid; it must be > 0 Hz")
+        keep &= freq <= fmax_hz
+    if not np.any(keep):
+        raise ValueError(f"the spectrum has no bins between its mean's main lobe "
+                         f"({_mean_lobe_hz(spec):.3g} Hz) and fmax_hz = {fmax_hz!r}")
+    return freq[keep], amp[keep]
 
 
-def plot_torque(record: TorqueRecord, *, ax: Axes | None = None, title: str | None = None
+def _line(item: LineSpec) -> tuple[str, float]:
+    if isinstance(item, tuple):
+        name, freq = item
+        return str(name), float(freq)
+    if hasattr(item, "frequency_hz"):
+        return str(getattr(item, "name", "")), float(item.frequency_hz)
+    return "", float(item)  # type: ignore[arg-type]
+
+
+def _set_title(ax: Axes, title: str | None, default: str, made: bool) -> None:
+    if title is not None:
+        ax.set_title(title)
+    elif made:
+        ax.set_title(default)
+
+
+# -- time domain -----------------------------------------------------------------------------
+def plot_torque(record: TorqueRecord, *, ax: Axes | None = None, title: str | None = None,
+                color: str = "tab:blue", linewidth: float = 0.7, show_mean: bool = True
                 ) -> Figure:
-    """Torque against time with its mean (paper Fig. 2)."""
-    fig, ax = _axes(ax)
-    ax.plot(record.time_s, record.torque_Nm, lw=0.7, color="tab:blue", label="torque")
-    ax.axhline(record.mean_torque_Nm, ls="--", color="k", lw=1,
-               label=f"mean {record.mean_torque_Nm:.4g} N m")
-    ax.set(xlabel="time (s)", ylabel="torque (N m)", title=title or "Drive torque")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="upper right")
-    return fig
+    """Drive torque against time, with its mean as a dashed line (paper Fig. 2).
 
+    Parameters
+    ----------
+    record : TorqueRecord
+        Torque (N m) against time (s).
+    ax : Axes, optional
+        Draw here instead of in a new figure.
+    title : str, optional
+        Axes title; default "Drive torque" on a new figure.
+    color, linewidth
+        Style of the torque trace.
+    show_mean : bool
+        Draw the mean torque T_c as a dashed horizontal line, labelled with its value.
 
-def plot_spectrum(spec: Spectrum, *, lth_hz: float | None = None,
-                  lines_hz: Sequence[LineSpec] = (), ax: Axes | None = None,
-                  title: str | None = None, fmax_hz: float | None = None,
-                  log: bool = False) -> Figure:
-    """Amplitude spectrum with the LTH marked (paper Fig. 10).
-
-    The main lobe of the 0 Hz line (the mean torque; up to 2/TR for Hann) is left out, so the
-    mean does not flatten the plot; drive-train lines, given as frequencies or (name, frequency)
-    pairs in Hz, are marked with dotted lines.
+    Returns
+    -------
+    Figure
+        The figure holding the axes: ``ax.lines[0]`` is the torque, ``ax.lines[1]`` the mean.
     """
-    fig, ax = _axes(ax)
-    f, a = _without_mean_lobe(spec, fmax_hz)
-    ax.plot(f, a, lw=0.8, color="tab:blue")
-    if log:
-        ax.set_yscale("log")
-    if lth_hz is not None:
-        k = int(np.argmin(np.abs(f - lth_hz)))
-        peak = float(a[max(k - 2, 0):k + 3].max())
-        ax.annotate(f"LTH {lth_hz:.2f} Hz", xy=(lth_hz, peak),
-                    xytext=(lth_hz, peak * (3 if log else 1.25)),
-                    ha="center", arrowprops={"arrowstyle": "->", "color": "tab:red"},
-                    color="tab:red")
-        if not log:
-            ax.set_ylim(top=max(ax.get_ylim()[1], peak * 1.4))
-    for item in lines_hz:
-        name, freq = (item if isinstance(item, tuple) else ("", float(item)))
-        ax.axvline(freq, ls=":", color="tab:gray", lw=1)
-        if name:
-            ax.text(freq, 0.98, name, rotation=90, va="top", ha="right", fontsize=8,
-                    transform=ax.get_xaxis_transform(), color="tab:gray")
-    ax.set(xlabel="frequency (Hz)", ylabel="amplitude (N m)", xlim=(0, f[-1] if f.size else 1),
-           title=title or f"Torque spectrum ({spec.window} window, "
-                          f"df = {spec.resolution_hz:.3g} Hz)")
-    ax.grid(alpha=0.3)
+    fig, ax, made = _axes(ax, (8.0, 3.8))
+    ax.plot(record.time_s, record.torque_Nm, lw=linewidth, color=color, label="torque")
+    if show_mean:
+        ax.axhline(record.mean_torque_Nm, ls="--", color="k", lw=1.1,
+                   label=f"mean $T_c$ = {record.mean_torque_Nm:.4g} N m")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("torque (N m)")
+    ax.set_xlim(record.time_s[0], record.time_s[-1])
+    _set_title(ax, title, "Drive torque", made)
+    ax.grid(**_GRID)
+    ax.legend(loc="upper right", fontsize="small")
     return fig
 
 
 def plot_filtered(original: TorqueRecord, filtered: TorqueRecord, *, ax: Axes | None = None,
                   title: str | None = None) -> Figure:
-    """The block's fluctuation (mean removed) and the filtered signal over it."""
+    """The filtered block over the original's fluctuation (paper section 6.4, Fig. 3).
+
+    The original is drawn with its mean subtracted (T - T_c, grey) so both traces share one
+    scale; the filtered record (mean and lines removed, e.g. by :func:`~millscope.band_stop`)
+    is drawn over it.
+
+    Parameters
+    ----------
+    original : TorqueRecord
+        The block before filtering, N m.
+    filtered : TorqueRecord
+        The same block after removal, N m; same sample times.
+    ax : Axes, optional
+        Draw here instead of in a new figure.
+    title : str, optional
+        Axes title.
+
+    Returns
+    -------
+    Figure
+        ``ax.lines[0]`` is the fluctuation, ``ax.lines[1]`` the filtered signal.
+
+    Raises
+    ------
+    ValueError
+        if the two records do not have the same sample times.
+    """
     if len(original) != len(filtered):
         raise ValueError(f"original has {len(original)} samples but filtered has "
                          f"{len(filtered)}; pass the filtered version of the same block")
-    fig, ax = _axes(ax)
+    if not np.allclose(original.time_s, filtered.time_s, rtol=0, atol=1e-6 * original.dt):
+        raise ValueError("original and filtered have different sample times; pass the filtered "
+                         "version of the same block")
+    fig, ax, made = _axes(ax, (8.0, 3.8))
     ax.plot(original.time_s, original.torque_Nm - original.mean_torque_Nm, lw=0.7,
-            color="tab:gray", label="torque - mean")
+            color="0.6", label="torque - mean")
     ax.plot(filtered.time_s, filtered.torque_Nm, lw=0.7, color="tab:blue",
             label="mean and lines removed")
-    ax.set(xlabel="time (s)", ylabel="torque fluctuation (N m)",
-           title=title or "Torque before and after removing the mean and the lines")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="upper right")
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("torque fluctuation (N m)")
+    ax.set_xlim(original.time_s[0], original.time_s[-1])
+    _set_title(ax, title, "Torque before and after removing the mean and the lines", made)
+    ax.grid(**_GRID)
+    ax.legend(loc="upper right", fontsize="small")
+    return fig
+
+
+# -- spectra ---------------------------------------------------------------------------------
+def plot_spectrum(spec: Spectrum, *, lth_hz: float | None = None,
+                  lines_hz: Sequence[LineSpec] = (), ax: Axes | None = None,
+                  title: str | None = None, fmax_hz: float | None = None, log: bool = False,
+                  color: str = "tab:blue", linewidth: float = 0.8, label: str | None = None
+                  ) -> Figure:
+    """Single-sided amplitude spectrum with the LTH marked by an arrow (paper Fig. 10).
+
+    The 0 Hz bin, and with a Hann window the rest of the mean's main lobe, are left out of the
+    trace and so of the autoscale: the mean torque, hundreds of N m, would otherwise flatten
+    the plot. With Hann the coherent-gain-corrected spectrum reads the mean at full height in
+    bin 1 (1/TR) too, so dropping 0 Hz alone is not enough. Left out: 0 .. 2/TR for ``"hann"``,
+    0 .. 1/TR for ``"hann_periodic"``, only 0 Hz for ``"rectangular"``; these bins lie inside
+    the band ``remove=["mean"]`` discards anyway.
+
+    Parameters
+    ----------
+    spec : Spectrum
+        From :func:`millscope.spectrum`; amplitude in N m.
+    lth_hz : float, optional
+        Frequency of the lifter torque harmonic, Hz (n_lifters x rotation frequency, or the
+        located peak); marked with an arrow to the largest amplitude within +-2 bins.
+    lines_hz : sequence, optional
+        Drive-train lines to mark with dotted vertical lines: frequencies in Hz, ``(name, hz)``
+        pairs, or objects with ``name`` and ``frequency_hz`` (drive-train ``InterferenceLine``).
+        Lines outside the plotted range are skipped.
+    ax : Axes, optional
+        Draw here instead of in a new figure.
+    title : str, optional
+        Axes title; default names the window and resolution on a new figure.
+    fmax_hz : float, optional
+        Highest frequency shown, Hz; default the Nyquist frequency.
+    log : bool
+        Logarithmic amplitude axis.
+    color, linewidth, label
+        Style and legend label of the spectrum trace.
+
+    Returns
+    -------
+    Figure
+        ``ax.lines[0]`` is the spectrum; the LTH arrow is the annotation in ``ax.texts`` whose
+        text starts with "LTH"; drive-train lines follow in ``ax.lines``.
+
+    Raises
+    ------
+    ValueError
+        for an LTH outside the plotted frequency range, or a bad ``fmax_hz``.
+    """
+    f, a = _spectrum_part(spec, fmax_hz)
+    fig, ax, made = _axes(ax, (8.0, 4.0))
+    ax.plot(f, a, lw=linewidth, color=color, label=label)
+    f_hi = float(f[-1])
+    if log:
+        ax.set_yscale("log")
+    else:
+        ax.set_ylim(bottom=0.0)
+    if lth_hz is not None:
+        if not float(f[0]) - spec.resolution_hz <= lth_hz <= f_hi + spec.resolution_hz:
+            raise ValueError(f"lth_hz = {lth_hz!r} Hz lies outside the plotted range "
+                             f"{f[0]:.3g} .. {f_hi:.3g} Hz")
+        k = int(np.argmin(np.abs(f - lth_hz)))
+        peak = float(a[max(k - 2, 0):k + 3].max())
+        # room above the peak for the arrow and its text, in data units so that it also fits
+        # small panels (a fixed offset in points would run into the title)
+        if log:
+            ax.set_ylim(top=max(ax.get_ylim()[1], peak * 6.0))
+            text_y = peak * 2.2
+        else:
+            ax.set_ylim(top=max(ax.get_ylim()[1], peak * 1.45))
+            text_y = peak * 1.2
+        ax.annotate(f"LTH {lth_hz:.2f} Hz", xy=(lth_hz, peak), xytext=(lth_hz, text_y),
+                    ha="center", va="bottom", color=_LTH_COLOR, fontsize="small",
+                    arrowprops={"arrowstyle": "-|>", "color": _LTH_COLOR, "lw": 1.2,
+                                "shrinkA": 0, "shrinkB": 1})
+    for item in lines_hz:
+        name, freq = _line(item)
+        if not 0 < freq <= f_hi:
+            continue
+        ax.axvline(freq, ls=":", color=_LINE_COLOR, lw=1.0)
+        if name:
+            ax.text(freq, 0.97, f" {name}", rotation=90, va="top",
+                    ha="left" if freq < 0.5 * f_hi else "right",
+                    fontsize="x-small", color=_LINE_COLOR, transform=ax.get_xaxis_transform())
+    ax.set_xlim(0.0, f_hi)
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("amplitude (N m)")
+    _set_title(ax, title, f"Torque spectrum ({spec.window} window, "
+                          f"df = {spec.resolution_hz:.3g} Hz)", made)
+    ax.grid(**_GRID)
+    if label is not None:
+        ax.legend(fontsize="small")
     return fig
 
 
 def plot_waterfall(spectra: Sequence[Spectrum], labels: Sequence[str], *,
-                   fmax_hz: float | None = None, title: str | None = None) -> Figure:
-    """3-D waterfall of several spectra in the given order, e.g. rising filling (Figs. 12-13).
+                   fmax_hz: float | None = None, title: str | None = None,
+                   ylabel: str = "filling level", cmap: str = "viridis",
+                   elev: float = 28.0, azim: float = -62.0) -> Figure:
+    """3-D waterfall of several spectra, one behind the other (paper Figs. 12-13).
 
-    x is frequency (Hz), y the case (labelled), z the amplitude (N m); the main lobe of the 0 Hz
-    line (the mean) is left out.
+    Give the spectra in the order to show them, e.g. increasing filling level: x is frequency
+    (Hz), y the position in that order with ``labels`` as tick labels, z the amplitude (N m).
+    As in :func:`plot_spectrum`, each spectrum's 0 Hz bin and mean lobe are left out.
+
+    Parameters
+    ----------
+    spectra : sequence of Spectrum
+        The spectra, front to back.
+    labels : sequence of str
+        One label per spectrum (e.g. "HDMS1" ... or "#1" ...).
+    fmax_hz : float, optional
+        Highest frequency shown, Hz.
+    title : str, optional
+        Figure title.
+    ylabel : str
+        Label of the case axis.
+    cmap : str
+        Colormap the traces are coloured from, front to back.
+    elev, azim : float
+        Viewing angles, degrees.
+
+    Returns
+    -------
+    Figure
+        One 3-D axes with one line per spectrum (``ax.lines``, in the given order).
+
+    Raises
+    ------
+    ValueError
+        if ``spectra`` and ``labels`` differ in length, or are empty.
     """
+    from matplotlib import colormaps
+
     if len(spectra) != len(labels):
         raise ValueError(f"spectra has {len(spectra)} entries but labels has {len(labels)}; "
                          "give one label per spectrum")
     if not spectra:
         raise ValueError("spectra is empty; give at least one spectrum")
-    fig = Figure(figsize=(9.0, 6.0), layout="constrained")
+    # a 3-D axes is square-ish and constrained layout leaves wide margins; fill the figure
+    fig = Figure(figsize=(9.0, 6.0))
+    fig.subplots_adjust(left=0.0, right=0.97, bottom=0.0, top=1.0)
     ax = fig.add_subplot(projection="3d")
+    colours = colormaps[cmap](np.linspace(0.0, 0.85, len(spectra)))
+    f_hi = 0.0
     for i, spec in enumerate(spectra):
-        f, a = _without_mean_lobe(spec, fmax_hz)
-        ax.plot(f, np.full_like(f, i), a, lw=0.7)
-    ax.set_yticks(range(len(labels)), labels)
+        f, a = _spectrum_part(spec, fmax_hz)
+        ax.plot(f, np.full_like(f, i), a, lw=0.8, color=colours[i])
+        f_hi = max(f_hi, float(f[-1]))
+    ax.set_xlim(0.0, f_hi)
+    ax.set_ylim(-0.5, len(spectra) - 0.5)
+    ax.set_zlim(bottom=0.0)
+    ax.set_yticks(range(len(labels)), [str(s) for s in labels])
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("case")
-    ax.set_zlabel("amplitude (N m)")
-    ax.view_init(elev=25, azim=-60)
-    ax.set_title(title or "Torque spectra")
+    ax.set_ylabel(ylabel, labelpad=22)
+    ax.set_zlabel("amplitude (N m)", labelpad=8)
+    ax.view_init(elev=elev, azim=azim)
+    ax.set_box_aspect((1.7, 1.2, 0.75), zoom=1.1)
+    fig.suptitle(title or "Torque spectra", y=0.96)
     return fig
 
 
-def _check_pairs(levels: ArrayLike, energies_pu: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+# -- energy against filling ------------------------------------------------------------------
+def _check_pairs(levels: ArrayLike, energies_pu: ArrayLike
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     x = np.asarray(levels, dtype=np.float64)
     y = np.asarray(energies_pu, dtype=np.float64)
-    if x.shape != y.shape or x.ndim != 1:
+    if x.ndim != 1 or y.ndim != 1 or x.shape != y.shape:
         raise ValueError(f"levels has {x.size} values but energies_pu has {y.size}; "
-                         "they must pair up")
+                         "they must be 1-D and pair up")
+    if x.size == 0:
+        raise ValueError("levels and energies_pu are empty; give at least one point")
     return x, y
+
+
+def _check_errors(errors: ArrayLike | None, n: int) -> NDArray[np.float64] | None:
+    if errors is None:
+        return None
+    e = np.asarray(errors, dtype=np.float64)
+    if e.ndim == 0:
+        e = np.full(n, float(e))
+    if e.shape not in ((n,), (2, n)):
+        raise ValueError(f"errors has shape {e.shape}; give {n} half-widths or a (2, {n}) "
+                         "array of lower and upper distances, one per level")
+    if not np.all(np.isfinite(e)) or np.any(e < 0):
+        raise ValueError("errors must be finite and >= 0 (distances from each point)")
+    return e
 
 
 def plot_energy_fit(levels: ArrayLike, energies_pu: ArrayLike, fit: LogFit | None = None, *,
                     ax: Axes | None = None, label: str | None = None,
-                    errors: ArrayLike | None = None, title: str | None = None) -> Figure:
-    """Energy per unit against load level with the log fit y = a ln(x) + b (Figs. 14-15).
+                    errors: ArrayLike | None = None, title: str | None = None,
+                    color: str | None = None, marker: str = "o",
+                    xlabel: str = "load level x (particle filling in units of 40 %)",
+                    ylabel: str = "spectral energy (per unit)") -> Figure:
+    """Per-unit spectral energy against load level, with the log fit (paper Figs. 14-15).
 
-    ``errors`` are half-widths, or a (2, n) array of lower and upper distances.
+    Parameters
+    ----------
+    levels : array_like
+        Load levels x (1..7 in the paper).
+    energies_pu : array_like
+        Energies per unit of the group's largest (dimensionless).
+    fit : LogFit, optional
+        y = a ln(x) + b, drawn as a curve over the levels' range; its equation and R^2 go into
+        the legend.
+    ax : Axes, optional
+        Draw here instead of in a new figure (several groups on one axes: Fig. 15).
+    label : str, optional
+        Name of the group in the legend (e.g. "HDMS").
+    errors : array_like, optional
+        Error bars: a scalar or n half-widths, or a (2, n) array of lower and upper distances.
+    title : str, optional
+        Axes title.
+    color, marker
+        Colour (default: the axes' next colour) and marker of the points; the curve shares
+        the colour.
+    xlabel, ylabel : str
+        Axis labels.
+
+    Returns
+    -------
+    Figure
+        The points are an errorbar container (``ax.containers``); the fit curve is the line in
+        ``ax.lines`` labelled ``"_fit <label>"``, followed by an empty line that is its legend
+        entry (marker over line).
+
+    Raises
+    ------
+    ValueError
+        if ``levels`` and ``energies_pu`` differ in length, or ``errors`` has the wrong shape.
     """
     x, y = _check_pairs(levels, energies_pu)
-    fig, ax = _axes(ax, (6.5, 4.5))
-    line = ax.errorbar(x, y, yerr=None if errors is None else np.asarray(errors), fmt="o",
-                       capsize=3, label=label or "energy")
+    yerr = _check_errors(errors, x.size)
+    fig, ax, made = _axes(ax, (6.5, 4.5))
+    points = ax.errorbar(x, y, yerr=yerr, fmt=marker, ms=6, capsize=3, color=color,
+                         label=(label or "energy") if fit is None else "_nolegend_")
+    colour = points[0].get_color()
     if fit is not None:
-        grid = np.linspace(min(x.min(), fit.x_min), max(x.max(), fit.x_max), 200)
-        ax.plot(grid, fit(grid), "-", color=line[0].get_color(),
-                label=f"{fit.equation()}, $R^2$ = {fit.r2:.4f}")
-    ax.set(xlabel="load level (particle filling / 40 %)", ylabel="energy (per unit)",
-           title=title or "Spectral energy against filling")
-    ax.grid(alpha=0.3)
-    ax.legend()
+        lo, hi = min(float(x.min()), fit.x_min), max(float(x.max()), fit.x_max)
+        grid = np.linspace(lo, hi, 200)
+        ax.plot(grid, fit(grid), "-", lw=1.4, color=colour, label=f"_fit {label or ''}")
+        # one legend entry per group, marker over line, naming the group and its fit
+        name = f"{label}: " if label else ""
+        ax.plot([], [], "-", marker=marker, ms=6, lw=1.4, color=colour,
+                label=f"{name}{fit.equation()}, $R^2$ = {fit.r2:.4f}")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    _set_title(ax, title, "Spectral energy against filling level", made)
+    ax.grid(True, **_GRID)
+    ax.legend(fontsize="small")
     return fig
 
 
-def plot_energy_fits(groups: Mapping[str, tuple[ArrayLike, ArrayLike, LogFit]], *,
+def plot_energy_fits(groups: Mapping[str, tuple[ArrayLike, ArrayLike, LogFit | None]], *,
                      title: str | None = None) -> Figure:
-    """Several groups (material x speed) with their log fits on one axes (Fig. 15)."""
-    fig, ax = _axes(None, (7.5, 5.0))
-    for name, (levels, energies, fit) in groups.items():
-        plot_energy_fit(levels, energies, fit, ax=ax, label=name)
-    ax.set_title(title or "Log fits of energy against filling")
+    """Several groups (material x speed, e.g. the paper's HDLS ... LDHS) with their log fits on
+    one axes (paper Fig. 15).
+
+    Parameters
+    ----------
+    groups : mapping of str to (levels, energies_pu, fit)
+        Per group: load levels, per-unit energies and its :class:`LogFit` (or None).
+    title : str, optional
+        Axes title.
+
+    Returns
+    -------
+    Figure
+        One axes; per group one set of points and one fit curve, with distinct colours and
+        markers, and a legend holding each group's equation and R^2.
+
+    Raises
+    ------
+    ValueError
+        for an empty mapping, or a group whose levels and energies do not pair up (the message
+        names the group).
+    """
+    if not groups:
+        raise ValueError("groups is empty; give at least one group")
+    fig, ax, _ = _axes(None, (7.5, 5.0))
+    for i, (name, entry) in enumerate(groups.items()):
+        try:
+            levels, energies, fit = entry
+        except (TypeError, ValueError):
+            raise ValueError(f"groups[{name!r}] must be (levels, energies_pu, fit)") from None
+        try:
+            plot_energy_fit(levels, energies, fit, ax=ax, label=name,
+                            marker=_MARKERS[i % len(_MARKERS)])
+        except ValueError as exc:
+            raise ValueError(f"groups[{name!r}]: {exc}") from None
+    ax.set_title(title or "Log fits of spectral energy against filling level")
+    ax.legend(fontsize="small")
     return fig
 
 
+# -- files -----------------------------------------------------------------------------------
 def save_figure(fig: Figure, path: str | os.PathLike[str], *, dpi: int = 150) -> Path:
-    """Write ``fig`` atomically (format from the suffix); creates the parent folder."""
+    """Write ``fig`` atomically, in the format its suffix names (png, pdf, svg ...).
+
+    The parent folder is created if needed; the file is written under a temporary name and
+    renamed, so a reader never sees half a figure and a failure leaves nothing behind.
+
+    Parameters
+    ----------
+    fig : Figure
+    path : path-like
+        Target file; its suffix chooses the format.
+    dpi : int
+        Resolution of raster formats, dots per inch.
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    ValueError
+        for a missing or unsupported suffix (the message lists the supported ones).
+    """
     target = Path(path)
+    fmt = target.suffix.lstrip(".").lower()
+    supported = fig.canvas.get_supported_filetypes()
+    if fmt not in supported:
+        raise ValueError(f"{target}: suffix {target.suffix!r} is not a figure format; use one "
+                         f"of {', '.join('.' + s for s in sorted(supported))}")
     target.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(target, "wb") as fh:
-        fig.savefig(fh, format=target.suffix.lstrip(".") or "png", dpi=dpi)
+        fig.savefig(fh, format=fmt, dpi=dpi)
     return target
