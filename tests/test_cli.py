@@ -40,7 +40,8 @@ def test_analyze_prints_the_figures_and_writes_plots(csv_record, tmp_path, capsy
 
 
 def test_analyze_removes_drive_lines_and_decimates(tmp_path, capsys) -> None:
-    """A 1 kHz record with a 23.1 Hz motor line: decimated to 100 Hz, the line removed."""
+    """A 1 kHz record with a 23.1 Hz motor line: decimated to 125 Hz, the line removed, only
+    0-50 Hz counted."""
     content = SyntheticTorque(rotation_hz=0.61, noise_std_Nm=5.0, lines=((23.1, 40.0),))
     path = tmp_path / "measured.csv"
     synthetic_record(2, content=content, sample_rate_hz=1000.0, duration_s=12.0).to_csv(path)
@@ -53,7 +54,7 @@ def test_analyze_removes_drive_lines_and_decimates(tmp_path, capsys) -> None:
     plain = capsys.readouterr().out
     assert main([*args, "--drive", str(drive)]) == 0
     with_drive = capsys.readouterr().out
-    assert "decimated from 1000 Hz to 100 Hz" in with_drive
+    assert "decimated from 1000 Hz to 125 Hz" in with_drive
 
     def energy(text: str) -> float:
         return float(next(x for x in text.splitlines() if x.startswith("spectral")).split()[2])

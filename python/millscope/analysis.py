@@ -70,7 +70,8 @@ class BlockAnalysis:
 def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
                   lines_hz: Sequence[float] = (), window: WindowName = "hann",
                   bandwidth: float = 0.3, search_hz: float | None = None,
-                  resolution_hz: float | None = None) -> BlockAnalysis:
+                  resolution_hz: float | None = None,
+                  band_hz: tuple[float, float] | None = None) -> BlockAnalysis:
     """Analyse a block: mean torque, the LTH located near lifters x rotation_hz, and the
     spectral energy after removing the mean, the LTH (at its located frequency) and ``lines_hz``.
 
@@ -86,6 +87,8 @@ def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
         Half-width of the LTH search, Hz (default 3 bins); real mills drift in speed.
     resolution_hz : float, optional
         Refuse a block too short to resolve this (eq. 9).
+    band_hz : (float, float), optional
+        Count only this band, Hz (default 0 .. Nyquist).
     """
     lth_hz = lifter_harmonic_hz(lifters, rotation_hz)
     nyquist = block.sample_rate_hz / 2
@@ -95,6 +98,6 @@ def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
     lth = find_peak(block, lth_hz, search_hz=search_hz, window=window)
     kept_lines = tuple(f for f in lines_hz if 0 < f <= nyquist and abs(f - lth_hz) > 1e-9)
     energy = spectral_energy(block, ["mean", lth.frequency_hz, *kept_lines], bandwidth=bandwidth,
-                             window=window, resolution_hz=resolution_hz)
+                             window=window, resolution_hz=resolution_hz, band=band_hz)
     return BlockAnalysis(mean_torque_Nm=block.mean_torque_Nm, lth_expected_hz=lth_hz, lth=lth,
                          energy=energy, lines_hz=kept_lines, record_length_s=block.duration_s)

@@ -1,72 +1,124 @@
-"""Drive trains of real mills and the torque lines they add (paper section 6.5, Table 7).
+"""Drive trains of real mills and the torque lines they add (paper sections 5 and 6.5, Table 7).
 
-Torque measured on a mill carries lines that do not come from grinding: the mill turn and its
-second harmonic, the turn of every gear shaft, gear mesh frequencies and the motor turn, besides
-the lifter torque harmonic (LTH). :class:`DriveTrain` lists them so that
-:func:`millscope.spectral_energy` can remove them, and :func:`decimate` brings a fast record down
-to the analysis band with an anti-aliasing filter.
+Torque measured on a real mill carries lines that do not come from grinding: the mill turn and
+its second harmonic, the turn of every gear shaft, the gear mesh frequencies and the motor turn,
+besides the lifter torque harmonic (LTH, lifters x mill turn, paper section 6.2). They move with
+the speed, so they are computed from a description of the drive: :class:`DriveTrain` lists them
+(:meth:`DriveTrain.interference_lines`, :meth:`DriveTrain.frequencies_hz`) so that
+:func:`millscope.spectral_energy` can remove them, and :func:`decimate` brings a record sampled
+faster than the analysis band down to it with an anti-aliasing filter.
 
-A ``drive.json`` for the paper's rig, whose only known tooth count is the 18-tooth pinion of the
-last stage (total ratio 36.27, 4-pole motor fed at 46 Hz)::
+Frequencies are in Hz throughout.
+
+The ``drive.json`` schema
+-------------------------
+One JSON object with exactly these keys (the command line reads it with ``--drive``)::
+
+    motor    object   pole_pairs  integer >= 1                      required
+                      supply_hz   number > 0, Hz          \\  exactly one of the two
+                      speed_hz    number > 0, Hz          /  (speed_hz: motor shaft turn)
+                      slip        number in [0, 1)        only with supply_hz; default 0
+    stages   array    one object per gear stage, from the motor to the mill (may be empty):
+                      driver_teeth  integer >= 1   teeth of the input (driving) gear
+                      driven_teeth  integer >= 1   teeth of the output (driven) gear
+                      ratio         number > 0     input speed / output speed
+                      name          string         label of the stage's lines (optional)
+                      A stage gives both tooth counts (the ratio is driven/driver), or a ratio,
+                      optionally with one tooth count so that its mesh line is known.
+    lifters  integer >= 1   lifters in the mill
+
+Unknown keys are errors, so that a misspelt key is not silently ignored.
+
+The paper's rig: a four-pole motor (2 pole pairs) fed at 46 Hz by an adjustable speed drive, a
+three-stage gear set of total ratio 36.27 whose last stage is an 18-tooth pinion turning at
+3.55 Hz in mesh with the crown on the mill (the 63.9 Hz mesh line, 18 x 3.55), and 16 lifters.
+The paper gives neither the ratios of the first two stages nor the crown's tooth count, so those
+two stages are lumped into one and the pinion stage is given by its ratio. The mill speed is not
+published either; taking the paper's "approximately 80 % critical" for the 880 mm mill
+(0.610 Hz) gives a motor speed of 0.610 x 36.27 = 22.12 Hz, a slip of 1 - 22.12 / 23 = 0.038, and
+the ratios 22.12 / 3.55 = 6.2315 and 36.27 / 6.2315 = 5.8204::
 
     {
-      "motor": {"pole_pairs": 2, "supply_hz": 46.0, "slip": 0.04},
-      "stages": [{"ratio": 6.2167}, {"driver_teeth": 18, "ratio": 5.8343}],
+      "motor": {"pole_pairs": 2, "supply_hz": 46.0, "slip": 0.038},
+      "stages": [
+        {"ratio": 6.2315, "name": "stages 1-2 (lumped)"},
+        {"driver_teeth": 18, "ratio": 5.8204, "name": "pinion-crown"}
+      ],
       "lifters": 16
     }
 
-A stage gives either both tooth counts (``driver_teeth``, ``driven_teeth``; the ratio is
-driven/driver) or a ``ratio`` (a speed reduction), optionally with ``driver_teeth`` so that its
-mesh line is known. The motor gives ``supply_hz`` (with ``slip``) or ``speed_hz``.
+Its lines: mill turn 0.610 Hz, twice that 1.220 Hz, pinion shaft 3.55 Hz (Table 7's "second
+stage gear output"), LTH 9.76 Hz, motor turn 22.12 Hz and the pinion-crown mesh 63.9 Hz (above
+the paper's 0 to 50 Hz band). Table 7 also lists a "mesh-related frequency" whose origin is not
+given; such lines can be appended to :meth:`DriveTrain.frequencies_hz` by hand.
 """
 
 from __future__ import annotations
 
+import json
 import math
+import numbers
 import os
-from dataclasses import dataclass
+from collections.abc import Iterable
+from dataclasses import dataclass, fields
 from fractions import Fraction
 from typing import Any
 
 import numpy as np
 import scipy.signal as ss
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from ._files import read_json
+from ._files import atomic_write, read_json
 
-__all__ = ["Motor", "GearStage", "DriveTrain", "InterferenceLine", "decimate"]
-
-
-def _require(ok: bool, message: str) -> None:
-    if not ok:
-        raise ValueError(message)
+__all__ = ["DriveTrain", "GearStage", "InterferenceLine", "Motor", "decimate"]
 
 
-def _positive_int(owner: str, name: str, value: Any) -> None:
-    _require(isinstance(value, int) and not isinstance(value, bool) and value >= 1,
-             f"{owner}.{name} = {value!r} is not valid; it must be an integer >= 1")
+# -- validation helpers ---------------------------------------------------------------------------
+def _is_int(value: Any) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
-def _positive_float(owner: str, name: str, value: Any) -> None:
-    _require(isinstance(value, (int, float)) and not isinstance(value, bool)
-             and math.isfinite(value) and value > 0,
-             f"{owner}.{name} = {value!r} is not valid; it must be a finite number > 0")
+def _is_real(value: Any) -> bool:
+    return (isinstance(value, numbers.Real) and not isinstance(value, bool)
+            and math.isfinite(float(value)))
 
 
+def _int_at_least(owner: str, name: str, value: Any, minimum: int = 1) -> int:
+    if not (_is_int(value) and int(value) >= minimum):
+        raise ValueError(f"{owner}.{name} = {value!r} is not valid; it must be an integer "
+                         f">= {minimum}")
+    return int(value)
+
+
+def _positive(owner: str, name: str, value: Any, unit: str = "") -> float:
+    if not (_is_real(value) and float(value) > 0):
+        raise ValueError(f"{owner}.{name} = {value!r} is not valid; it must be a finite number "
+                         f"> 0{unit}")
+    return float(value)
+
+
+# -- the drive ------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Motor:
-    """An induction motor.
+    """An induction motor, given by its supply frequency and slip or by its shaft speed.
 
     Parameters
     ----------
     pole_pairs : int
-        Pole pairs (a four-pole motor has 2).
+        Pole pairs, >= 1 (a four-pole motor has 2).
     supply_hz : float, optional
-        Supply frequency, Hz; the shaft turns at supply_hz / pole_pairs x (1 - slip).
-    slip : float
-        Slip, in [0, 1).
+        Supply (electrical) frequency, Hz, > 0; the shaft turns at
+        ``supply_hz / pole_pairs * (1 - slip)``. Exactly one of `supply_hz` and `speed_hz`.
+    slip : float, default 0
+        Slip, in [0, 1); only with `supply_hz`.
     speed_hz : float, optional
-        Shaft turn frequency, Hz, when known directly (then no supply_hz).
+        Shaft turn frequency, Hz, > 0, when it is known directly (measured, or back-computed from
+        the mill speed). Exactly one of `supply_hz` and `speed_hz`.
+
+    Raises
+    ------
+    ValueError
+        For a bad value, naming the parameter, the value and the valid range.
     """
 
     pole_pairs: int
@@ -75,107 +127,227 @@ class Motor:
     speed_hz: float | None = None
 
     def __post_init__(self) -> None:
-        _positive_int("Motor", "pole_pairs", self.pole_pairs)
-        _require((self.supply_hz is None) != (self.speed_hz is None),
-                 "Motor: give exactly one of supply_hz and speed_hz; got "
-                 f"supply_hz = {self.supply_hz!r}, speed_hz = {self.speed_hz!r}")
+        object.__setattr__(self, "pole_pairs",
+                           _int_at_least("Motor", "pole_pairs", self.pole_pairs))
+        if (self.supply_hz is None) == (self.speed_hz is None):
+            raise ValueError("Motor: give exactly one of supply_hz and speed_hz; got "
+                             f"supply_hz = {self.supply_hz!r}, speed_hz = {self.speed_hz!r}")
         if self.supply_hz is not None:
-            _positive_float("Motor", "supply_hz", self.supply_hz)
+            object.__setattr__(self, "supply_hz",
+                               _positive("Motor", "supply_hz", self.supply_hz, " Hz"))
         if self.speed_hz is not None:
-            _positive_float("Motor", "speed_hz", self.speed_hz)
-        _require(isinstance(self.slip, (int, float)) and 0 <= self.slip < 1,
-                 f"Motor.slip = {self.slip!r} is not valid; it must be in [0, 1)")
+            object.__setattr__(self, "speed_hz",
+                               _positive("Motor", "speed_hz", self.speed_hz, " Hz"))
+        if not (_is_real(self.slip) and 0.0 <= float(self.slip) < 1.0):
+            raise ValueError(f"Motor.slip = {self.slip!r} is not valid; it must be a number "
+                             "in [0, 1)")
+        if self.speed_hz is not None and self.slip != 0:
+            raise ValueError(f"Motor.slip = {self.slip!r} is not valid with speed_hz; slip "
+                             "applies to supply_hz only, so it must be 0 when the shaft speed "
+                             "is given")
+        object.__setattr__(self, "slip", float(self.slip))
 
     @property
     def shaft_hz(self) -> float:
         """Motor shaft turn frequency, Hz."""
         if self.speed_hz is not None:
-            return float(self.speed_hz)
+            return self.speed_hz
         assert self.supply_hz is not None
         return self.supply_hz / self.pole_pairs * (1.0 - self.slip)
 
 
 @dataclass(frozen=True)
 class GearStage:
-    """One gear stage, a speed reduction from its driver (input) to its driven (output) shaft.
+    """One gear stage: a speed reduction from its driver (input) shaft to its driven (output)
+    shaft.
 
     Parameters
     ----------
-    driver_teeth, driven_teeth : int, optional
-        Tooth counts; both given fix the ratio driven/driver.
+    driver_teeth : int, optional
+        Teeth of the input (driving) gear, >= 1.
+    driven_teeth : int, optional
+        Teeth of the output (driven) gear, >= 1.
     ratio : float, optional
-        Speed ratio input/output (> 0) when the tooth counts are not both known.
+        Speed ratio input / output, > 0, when the tooth counts are not both known.
+    name : str, optional
+        Label of the stage's lines (default ``"stage i"``).
+
+    Notes
+    -----
+    Either both tooth counts (the ratio is driven_teeth / driver_teeth) or a ratio. A ratio alone
+    leaves the mesh line unknown; with one tooth count besides it the mesh line is known, since
+    the mesh frequency is driver_teeth x input turn = driven_teeth x output turn.
+
+    Raises
+    ------
+    ValueError
+        For a bad value or combination, naming the parameters and values.
     """
 
     driver_teeth: int | None = None
     driven_teeth: int | None = None
     ratio: float | None = None
+    name: str | None = None
 
     def __post_init__(self) -> None:
-        for name in ("driver_teeth", "driven_teeth"):
-            value = getattr(self, name)
+        for key in ("driver_teeth", "driven_teeth"):
+            value = getattr(self, key)
             if value is not None:
-                _positive_int("GearStage", name, value)
+                object.__setattr__(self, key, _int_at_least("GearStage", key, value))
         both = self.driver_teeth is not None and self.driven_teeth is not None
         if self.ratio is not None:
-            _positive_float("GearStage", "ratio", self.ratio)
-            _require(not both, "GearStage: give the ratio or both tooth counts, not both; got "
-                     f"ratio = {self.ratio!r}, teeth {self.driver_teeth}/{self.driven_teeth}")
-        else:
-            _require(both, "GearStage: give both driver_teeth and driven_teeth, or a ratio; got "
-                     f"driver_teeth = {self.driver_teeth!r}, driven_teeth = "
-                     f"{self.driven_teeth!r}")
+            object.__setattr__(self, "ratio", _positive("GearStage", "ratio", self.ratio))
+            if both:
+                raise ValueError(
+                    "GearStage: give the ratio or both tooth counts, not both; got "
+                    f"ratio = {self.ratio!r}, driver_teeth = {self.driver_teeth!r}, "
+                    f"driven_teeth = {self.driven_teeth!r}")
+        elif not both:
+            raise ValueError(
+                "GearStage: give both driver_teeth and driven_teeth, or a ratio; got "
+                f"driver_teeth = {self.driver_teeth!r}, driven_teeth = {self.driven_teeth!r}")
+        if self.name is not None and not (isinstance(self.name, str) and self.name.strip()):
+            raise ValueError(f"GearStage.name = {self.name!r} is not valid; it must be a "
+                             "non-empty string or None")
 
     @property
     def speed_ratio(self) -> float:
-        """Input speed / output speed."""
+        """Input turn frequency / output turn frequency (dimensionless)."""
         if self.ratio is not None:
-            return float(self.ratio)
+            return self.ratio
         assert self.driver_teeth is not None and self.driven_teeth is not None
         return self.driven_teeth / self.driver_teeth
+
+    def mesh_hz(self, input_hz: float) -> float | None:
+        """Gear mesh frequency, Hz, for the input shaft turning at `input_hz` (Hz): driver_teeth x
+        input_hz (or driven_teeth x output turn); None when no tooth count is known."""
+        if self.driver_teeth is not None:
+            return self.driver_teeth * input_hz
+        if self.driven_teeth is not None:
+            return self.driven_teeth * input_hz / self.speed_ratio
+        return None
 
 
 @dataclass(frozen=True)
 class InterferenceLine:
-    """A torque line of the drive: ``name``, ``frequency_hz`` (Hz), ``source`` (what makes it)."""
+    """A torque line that does not come from grinding.
+
+    Parameters
+    ----------
+    name : str
+        What the line is, e.g. ``"mill turn"``, ``"stage 3 gear mesh"``, ``"LTH"``.
+    frequency_hz : float
+        Its frequency, Hz, > 0.
+    source : str
+        The part that makes it: ``"mill"``, ``"lifters"``, ``"motor"`` or the stage's label.
+    """
 
     name: str
     frequency_hz: float
     source: str
 
+    def __post_init__(self) -> None:
+        for key in ("name", "source"):
+            value = getattr(self, key)
+            if not (isinstance(value, str) and value.strip()):
+                raise ValueError(f"InterferenceLine.{key} = {value!r} is not valid; it must be "
+                                 "a non-empty string")
+        object.__setattr__(self, "frequency_hz", _positive("InterferenceLine", "frequency_hz",
+                                                           self.frequency_hz, " Hz"))
+
+
+_TOP_KEYS = ("motor", "stages", "lifters")
+_MOTOR_KEYS = tuple(f.name for f in fields(Motor))
+_STAGE_KEYS = tuple(f.name for f in fields(GearStage))
+
+
+def _check_keys(where: str, obj: dict[str, Any], allowed: tuple[str, ...],
+                required: tuple[str, ...]) -> None:
+    missing = [k for k in required if k not in obj]
+    if missing:
+        raise ValueError(f"{where}: missing key {', '.join(repr(k) for k in missing)}")
+    unknown = [k for k in obj if k not in allowed]
+    if unknown:
+        raise ValueError(f"{where}: unknown key {', '.join(repr(k) for k in unknown)}; the keys "
+                         f"are {', '.join(allowed)}")
+
 
 @dataclass(frozen=True)
 class DriveTrain:
-    """Motor, gear stages from motor to mill, and the mill's lifter count."""
+    """A mill drive: the motor, the gear stages from the motor to the mill, and the lifters.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor; its shaft drives the first stage (or the mill when there is no stage).
+    stages : tuple of GearStage
+        Gear stages in order from the motor to the mill (a list is accepted and stored as a
+        tuple); the output shaft of the last stage is the mill.
+    lifters : int
+        Lifters in the mill, >= 1 (the LTH is lifters x mill turn).
+
+    Raises
+    ------
+    ValueError
+        For a bad value, naming the parameter, the value and the valid range.
+    """
 
     motor: Motor
     stages: tuple[GearStage, ...]
     lifters: int
 
     def __post_init__(self) -> None:
-        _require(isinstance(self.motor, Motor),
-                 f"DriveTrain.motor must be a Motor; got {type(self.motor).__name__}")
-        object.__setattr__(self, "stages", tuple(self.stages))
-        _require(all(isinstance(s, GearStage) for s in self.stages),
-                 "DriveTrain.stages must all be GearStage")
-        _positive_int("DriveTrain", "lifters", self.lifters)
+        if not isinstance(self.motor, Motor):
+            raise ValueError(f"DriveTrain.motor = {self.motor!r} is not valid; it must be a "
+                             "Motor")
+        stages = self.stages
+        if isinstance(stages, GearStage) or not isinstance(stages, Iterable):
+            raise ValueError(f"DriveTrain.stages = {stages!r} is not valid; it must be a tuple "
+                             "of GearStage (empty for a direct drive)")
+        stages = tuple(stages)
+        for i, stage in enumerate(stages):
+            if not isinstance(stage, GearStage):
+                raise ValueError(f"DriveTrain.stages[{i}] = {stage!r} is not valid; it must be "
+                                 "a GearStage")
+        object.__setattr__(self, "stages", stages)
+        object.__setattr__(self, "lifters", _int_at_least("DriveTrain", "lifters", self.lifters))
 
     @classmethod
-    def from_mill_speed(cls, mill_hz: float, stages: tuple[GearStage, ...], lifters: int,
+    def from_mill_speed(cls, mill_hz: float, stages: Iterable[GearStage], lifters: int,
                         pole_pairs: int = 2) -> DriveTrain:
-        """The drive whose mill turns at ``mill_hz`` (Hz): the motor speed follows the ratios."""
-        _positive_float("DriveTrain", "mill_hz", mill_hz)
-        ratio = math.prod(s.speed_ratio for s in stages)
-        return cls(Motor(pole_pairs, speed_hz=mill_hz * ratio), tuple(stages), lifters)
+        """The drive whose mill turns at `mill_hz`, the motor speed back-computed from the ratios.
+
+        Parameters
+        ----------
+        mill_hz : float
+            Mill turn frequency, Hz, > 0 (e.g. measured, or the LTH found divided by lifters).
+        stages : iterable of GearStage
+            Gear stages from the motor to the mill.
+        lifters : int
+            Lifters in the mill, >= 1.
+        pole_pairs : int, default 2
+            Pole pairs of the motor (recorded only: its speed is set directly, ``speed_hz``).
+
+        Returns
+        -------
+        DriveTrain
+            With ``Motor(pole_pairs, speed_hz=mill_hz * total_ratio)``.
+        """
+        mill = _positive("DriveTrain.from_mill_speed", "mill_hz", mill_hz, " Hz")
+        # validate the stages and lifters first, with a placeholder motor speed
+        unit_speed = cls(Motor(pole_pairs, speed_hz=1.0), tuple(stages), lifters)
+        return cls(Motor(pole_pairs, speed_hz=mill * unit_speed.total_ratio), unit_speed.stages,
+                   lifters)
 
     @property
     def total_ratio(self) -> float:
-        """Motor speed / mill speed."""
-        return math.prod(s.speed_ratio for s in self.stages)
+        """Motor turn frequency / mill turn frequency (dimensionless; 1 without stages)."""
+        return math.prod(stage.speed_ratio for stage in self.stages)
 
     @property
     def shaft_hz(self) -> tuple[float, ...]:
-        """Turn frequency of the output shaft of each stage, Hz (the last is the mill)."""
+        """Turn frequency, Hz, of the output shaft of each stage, in order (the last is the
+        mill's)."""
         speeds, speed = [], self.motor.shaft_hz
         for stage in self.stages:
             speed /= stage.speed_ratio
@@ -187,87 +359,225 @@ class DriveTrain:
         """Mill turn frequency, Hz."""
         return self.shaft_hz[-1] if self.stages else self.motor.shaft_hz
 
+    @property
+    def lth_hz(self) -> float:
+        """Lifter torque harmonic, Hz: lifters x mill turn (paper section 6.2)."""
+        return self.lifters * self.mill_hz
+
     def interference_lines(self, max_hz: float | None = None) -> list[InterferenceLine]:
-        """The lines of Table 7, sorted by frequency, up to ``max_hz`` (Hz) when given:
-        mill turn and its second harmonic, each intermediate shaft's turn, each known gear mesh,
-        the motor turn, and the LTH (lifters x mill turn)."""
+        """The drive's torque lines (paper Table 7), sorted by frequency.
+
+        Parameters
+        ----------
+        max_hz : float, optional
+            Keep only lines at or below this frequency, Hz, > 0 (e.g. the analysis band).
+
+        Returns
+        -------
+        list of InterferenceLine
+            The mill turn and its second harmonic, the turn of each intermediate shaft (the
+            output of every stage but the last), each known gear mesh, the motor turn (when there
+            is a gear stage; otherwise it is the mill turn) and the LTH, by rising frequency.
+        """
+        limit = None if max_hz is None else _positive("interference_lines", "max_hz", max_hz,
+                                                      " Hz")
         mill = self.mill_hz
         lines = [InterferenceLine("mill turn", mill, "mill"),
-                 InterferenceLine("2 x mill turn", 2 * mill, "mill"),
-                 InterferenceLine("LTH", self.lifters * mill, "lifters"),
-                 InterferenceLine("motor turn", self.motor.shaft_hz, "motor")]
+                 InterferenceLine("2 x mill turn", 2.0 * mill, "mill"),
+                 InterferenceLine("LTH", self.lth_hz, "lifters")]
+        if self.stages:
+            lines.append(InterferenceLine("motor turn", self.motor.shaft_hz, "motor"))
         input_hz = self.motor.shaft_hz
-        for i, (stage, out_hz) in enumerate(zip(self.stages, self.shaft_hz, strict=True), 1):
-            if i < len(self.stages):
-                lines.append(InterferenceLine(f"stage {i} output shaft turn", out_hz,
-                                              f"gear stage {i}"))
-            if stage.driver_teeth is not None:
-                lines.append(InterferenceLine(f"stage {i} gear mesh",
-                                              stage.driver_teeth * input_hz, f"gear stage {i}"))
-            input_hz = out_hz
-        if max_hz is not None:
-            lines = [line for line in lines if line.frequency_hz <= max_hz]
+        last = len(self.stages) - 1
+        for i, (stage, output_hz) in enumerate(zip(self.stages, self.shaft_hz, strict=True)):
+            label = stage.name or f"stage {i + 1}"
+            if i < last:
+                lines.append(InterferenceLine(f"{label} output shaft turn", output_hz, label))
+            mesh = stage.mesh_hz(input_hz)
+            if mesh is not None:
+                lines.append(InterferenceLine(f"{label} gear mesh", mesh, label))
+            input_hz = output_hz
+        if limit is not None:
+            lines = [line for line in lines if line.frequency_hz <= limit]
         return sorted(lines, key=lambda line: line.frequency_hz)
 
     def frequencies_hz(self, max_hz: float | None = None, include_lth: bool = True
                        ) -> list[float]:
-        """Frequencies of :meth:`interference_lines`, Hz, to pass as ``remove=``."""
-        return [line.frequency_hz for line in self.interference_lines(max_hz)
-                if include_lth or line.name != "LTH"]
+        """Frequencies of :meth:`interference_lines`, Hz, rising, to pass to spectral energy
+        removal.
 
-    # -- JSON ------------------------------------------------------------------------------
+        Parameters
+        ----------
+        max_hz : float, optional
+            Keep only lines at or below this frequency, Hz.
+        include_lth : bool, default True
+            Whether to include the LTH (leave it out when the caller locates and removes the LTH
+            itself).
+
+        Returns
+        -------
+        list of float
+            Line frequencies, Hz.
+        """
+        return [line.frequency_hz for line in self.interference_lines(max_hz)
+                if include_lth or line.source != "lifters"]
+
+    # -- JSON -------------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-serialisable dict (the ``drive.json`` schema of the module docstring)."""
-        def clean(obj: object) -> dict[str, Any]:
-            return {k: v for k, v in vars(obj).items() if v is not None}
-        return {"motor": clean(self.motor), "stages": [clean(s) for s in self.stages],
+        """The drive as a JSON-serialisable dict (the ``drive.json`` schema of the module
+        docstring); unset optional fields are left out."""
+        def plain(obj: Motor | GearStage) -> dict[str, Any]:
+            return {f.name: getattr(obj, f.name) for f in fields(obj)
+                    if getattr(obj, f.name) is not None}
+        return {"motor": plain(self.motor), "stages": [plain(s) for s in self.stages],
                 "lifters": self.lifters}
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "drive") -> DriveTrain:
-        """Build from :meth:`to_dict`'s form; errors name ``where`` and the faulty key."""
+        """Build a drive from :meth:`to_dict`'s form (a parsed ``drive.json``).
+
+        Parameters
+        ----------
+        data : dict
+            The parsed JSON.
+        where : str, default "drive"
+            Prefix of error messages (the file name when read by :meth:`load`).
+
+        Raises
+        ------
+        ValueError
+            Naming `where`, the key and what is wrong with it (missing, unknown, wrong type or
+            out of range).
+        """
         if not isinstance(data, dict):
-            raise ValueError(f"{where}: expected a JSON object with keys motor, stages, lifters")
-        missing = [k for k in ("motor", "stages", "lifters") if k not in data]
-        if missing:
-            raise ValueError(f"{where}: missing key {', '.join(missing)}")
-        if not isinstance(data["motor"], dict):
-            raise ValueError(f"{where}: 'motor' must be an object")
-        if not isinstance(data["stages"], list) or not all(isinstance(s, dict)
-                                                           for s in data["stages"]):
-            raise ValueError(f"{where}: 'stages' must be a list of objects")
+            raise ValueError(f"{where}: expected a JSON object with keys motor, stages, lifters; "
+                             f"got {type(data).__name__}")
+        _check_keys(where, data, _TOP_KEYS, _TOP_KEYS)
+        motor_data, stages_data = data["motor"], data["stages"]
+        if not isinstance(motor_data, dict):
+            raise ValueError(f"{where}: 'motor' must be an object; got "
+                             f"{type(motor_data).__name__}")
+        _check_keys(f"{where}: motor", motor_data, _MOTOR_KEYS, ("pole_pairs",))
+        if not isinstance(stages_data, list):
+            raise ValueError(f"{where}: 'stages' must be an array of objects; got "
+                             f"{type(stages_data).__name__}")
         try:
-            motor = Motor(**data["motor"])
-            stages = tuple(GearStage(**s) for s in data["stages"])
-            return cls(motor, stages, data["lifters"])
-        except TypeError as exc:  # an unknown key
-            raise ValueError(f"{where}: {exc}") from None
+            motor = Motor(**motor_data)
+        except ValueError as exc:
+            raise ValueError(f"{where}: motor: {exc}") from None
+        stages = []
+        for i, stage_data in enumerate(stages_data):
+            if not isinstance(stage_data, dict):
+                raise ValueError(f"{where}: stages[{i}] must be an object; got "
+                                 f"{type(stage_data).__name__}")
+            _check_keys(f"{where}: stages[{i}]", stage_data, _STAGE_KEYS, ())
+            try:
+                stages.append(GearStage(**stage_data))
+            except ValueError as exc:
+                raise ValueError(f"{where}: stages[{i}]: {exc}") from None
+        try:
+            return cls(motor, tuple(stages), data["lifters"])
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> DriveTrain:
-        """Read a ``drive.json``."""
+        """Read a ``drive.json`` (schema in the module docstring).
+
+        Raises
+        ------
+        ValueError
+            Naming the file and the problem: missing file, invalid JSON, missing or unknown key,
+            wrong type, value out of range.
+        """
         return cls.from_dict(read_json(path, "drive"), str(path))
 
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write the drive as a ``drive.json`` (atomically: a temporary file, then a rename)."""
+        with atomic_write(path) as fh:
+            json.dump(self.to_dict(), fh, indent=2)
+            fh.write("\n")
 
-def decimate(time_s: NDArray[np.float64], torque: NDArray[np.float64], target_hz: float
-             ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Resample a uniformly sampled record to ``target_hz`` (Hz) with an anti-aliasing filter.
 
-    Uses ``scipy.signal.resample_poly`` (a zero-phase polyphase FIR) with the rational
-    ratio target/source; returns the new time axis (from ``time_s[0]``, step 1/target_hz) and
-    the filtered samples.
+# -- decimation -----------------------------------------------------------------------------------
+def decimate(time_s: ArrayLike, torque: ArrayLike, target_hz: float, *,
+             uniform_rtol: float = 1e-6) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Resample a uniformly sampled record to a lower rate `target_hz` with an anti-aliasing
+    filter.
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times, s: 1-D, finite, strictly increasing and uniform (within `uniform_rtol` of
+        the mean step), at least 2 samples.
+    torque : array_like
+        Samples (e.g. torque in N m), 1-D, finite, as many as `time_s`.
+    target_hz : float
+        New sampling rate, Hz, in (0, input rate).
+    uniform_rtol : float, default 1e-6
+        Allowed deviation of a time step from the mean step, relative (as ``TorqueRecord``).
+
+    Returns
+    -------
+    time_s : ndarray
+        New uniform time axis, s, from ``time_s[0]`` with step 1 / (input rate x up / down).
+    samples : ndarray
+        The filtered, resampled samples.
+
+    Raises
+    ------
+    ValueError
+        For bad arrays, or a `target_hz` not below the input rate or not reachable as a ratio.
+
+    Notes
+    -----
+    ``scipy.signal.resample_poly`` with ``up/down = Fraction(target_hz / input rate)
+    .limit_denominator(1000)``; the rate reached is within 0.1 % of `target_hz` (exact for the
+    usual rates, e.g. 1000 Hz to 100 Hz). The filter (scipy's default Kaiser FIR, zero phase) is
+    flat within 0.05 dB up to 0.8 x the new Nyquist frequency f_N = rate/2, -0.7 dB at 0.9 f_N,
+    -6 dB at f_N, and at least 55 dB down above 1.2 f_N; so keep the analysis band below
+    0.8 f_N, i.e. choose `target_hz` >= 2.5 x its top. Beyond the ends the record is assumed to
+    continue the straight line through its first and last samples (``padtype="line"``), so the
+    mean torque and a slow drift leave no transient at the edges.
     """
-    time_s = np.asarray(time_s, dtype=np.float64)
-    torque = np.asarray(torque, dtype=np.float64)
-    if time_s.size < 2 or time_s.shape != torque.shape:
-        raise ValueError("decimate: time_s and torque must be 1-D of equal length >= 2")
-    source_hz = (time_s.size - 1) / (time_s[-1] - time_s[0])
-    if not (math.isfinite(target_hz) and 0 < target_hz < source_hz):
+    t = np.asarray(time_s, dtype=np.float64)
+    x = np.asarray(torque, dtype=np.float64)
+    if t.ndim != 1 or x.ndim != 1:
+        raise ValueError(f"decimate: time_s and torque must be 1-D arrays; got shapes {t.shape} "
+                         f"and {x.shape}")
+    if t.size != x.size:
+        raise ValueError(f"decimate: time_s has {t.size} samples but torque has {x.size}; they "
+                         "must match")
+    if t.size < 2:
+        raise ValueError(f"decimate: at least 2 samples are needed; got {t.size}")
+    for name, values in (("time_s", t), ("torque", x)):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            i = int(bad[0])
+            raise ValueError(f"decimate: {name}[{i}] = {float(values[i])!r} is not finite; "
+                             "every sample must be a finite number")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        i = int(np.flatnonzero(steps <= 0)[0])
+        raise ValueError(f"decimate: time_s is not strictly increasing at sample {i + 1} "
+                         f"({float(t[i])!r} s then {float(t[i + 1])!r} s)")
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    worst = int(np.argmax(np.abs(steps - dt)))
+    if abs(steps[worst] - dt) > uniform_rtol * dt:
+        raise ValueError(f"decimate: sampling is not uniform: step {worst + 1} is "
+                         f"{float(steps[worst])!r} s against a mean step of {float(dt)!r} s "
+                         f"(allowed deviation uniform_rtol = {uniform_rtol:g} relative)")
+    source_hz = 1.0 / dt
+    if not (_is_real(target_hz) and 0 < float(target_hz) < source_hz):
         raise ValueError(f"target_hz = {target_hz!r} is not valid; it must be in "
                          f"(0, {source_hz:g}) Hz, below the record's sample rate")
-    ratio = Fraction(target_hz / source_hz).limit_denominator(1000)
-    y = ss.resample_poly(torque, ratio.numerator, ratio.denominator)
-    step = 1.0 / (source_hz * ratio.numerator / ratio.denominator)
-    return time_s[0] + step * np.arange(y.size), y
+    ratio = Fraction(float(target_hz) / source_hz).limit_denominator(1000)
+    reached_hz = source_hz * ratio.numerator / ratio.denominator
+    if ratio == 0 or ratio >= 1 or abs(reached_hz / target_hz - 1) > 1e-3:
+        raise ValueError(f"target_hz = {target_hz!r} is not valid for a record sampled at "
+                         f"{source_hz:g} Hz: the nearest rational rate ratio up/down with "
+                         f"down <= 1000 is {ratio}, giving {reached_hz:g} Hz; it must be a "
+                         "reduction within 0.1 % of target_hz (decimate in two steps for ratios "
+                         "below 1/1000)")
+    y = ss.resample_poly(x, ratio.numerator, ratio.denominator, padtype="line")
+    return t[0] + np.arange(y.size) / reached_hz, np.asarray(y, dtype=np.float64)
