@@ -11,11 +11,13 @@ namespace py = pybind11;
 
 namespace millscope::bindings {
 void register_dsp(py::module_& m);
+void register_contact(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "millscope C++ core (private; use the millscope package)";
   millscope::bindings::register_dsp(m);
+  millscope::bindings::register_contact(m);
 
   m.def("build_info", [] {
     py::dict info;

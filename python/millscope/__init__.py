@@ -6,7 +6,7 @@ The public API (DESIGN.md section 5) is re-exported here; submodules hold the de
 from importlib import import_module as _import_module
 from typing import Any as _Any
 
-from . import drivetrain
+from . import contact, drivetrain
 from ._core import build_info as _build_info
 from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
 from .record import RecordError, TorqueRecord
@@ -43,6 +43,7 @@ __all__ = [
     "TorqueRecord",
     "__version__",
     "band_stop",
+    "contact",
     "drivetrain",
     "estimate_fill",
     "find_peak",

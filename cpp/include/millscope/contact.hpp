@@ -1,0 +1,331 @@
+// Hertz-Mindlin no-slip contact with damping (paper section 3.1, eqs. 1-8; DESIGN.md sections 2
+// and 7). Pure, inline functions of (overlap, relative velocity, history); no allocation, no
+// virtual calls. The engine's hot loop calls these once per touching pair per step.
+//
+// ---------------------------------------------------------------------------------------------
+// Sign conventions (body i against body j; a wall is j with R_j, m_j -> infinity)
+// ---------------------------------------------------------------------------------------------
+//   n      unit normal from j to i: n = (x_i - x_j) / |x_i - x_j|; for a wall, from the wall
+//          surface into the sphere.
+//   d_n    overlap, r_i + r_j - |x_i - x_j| (r_i - distance to the wall); in contact iff d_n > 0.
+//   v_rel  velocity of i's material point at the contact relative to j's:
+//            v_rel = v_i + w_i x (-r_i n) - (v_j + w_j x (r_j n))        (wall: - v_wall(x_c))
+//   v_n    = v_rel . n, NEGATIVE while the bodies approach, positive while they separate.
+//   v_t    = v_rel - v_n n, the tangential slip velocity.
+//   F      force on i, F = F_n n + F_t; j receives -F. F_n > 0 pushes i away from j.
+//   torque on i about its centre: (-r_i n) x F_t; on j: (r_j n) x (-F_t) (F_n n has no arm).
+//
+// The paper writes the damping forces as F_nd = -2 sqrt(5/6) beta sqrt(S_n m*) v_n (2) and
+// F_td = -2 sqrt(5/6) beta sqrt(S_t m*) v_t (7), with beta = ln(e)/sqrt(ln^2 e + pi^2) <= 0 (3).
+// The coefficient gamma = -2 sqrt(5/6) beta sqrt(S m*) is therefore >= 0, and a damper must
+// dissipate: F_d . v <= 0. With v_n, v_t the velocity of i relative to j (as above) that requires
+//   F_nd = -gamma_n v_n,   F_td = -gamma_t v_t,
+// i.e. eqs. (2) and (7) with their v^rel read as the velocity of i relative to j and the sign of
+// the whole term being that of a dashpot (-gamma v). Approaching (v_n < 0), the damping pushes i
+// away from j (F_nd > 0); separating, it pulls (F_nd < 0). Power: F_nd v_n = -gamma_n v_n^2 <= 0.
+// (Taken literally with beta < 0 and v_n < 0 on approach, eq. (2) would feed energy in. With the
+// dashpot reading, the unclamped law returns exactly e for any impact speed: integrated
+// accurately, e = 0.2, 0.3, 0.5 come back to 1e-9; at dt = t_c/50 within 1.5 %.)
+// The elastic tangential force F_te = -S_t d_t (5) needs no reinterpretation: d_t is the
+// accumulated displacement of i relative to j, d_t = integral of v_t dt, and the spring pulls it
+// back.
+//
+// ---------------------------------------------------------------------------------------------
+// Structure (DESIGN.md section 7)
+// ---------------------------------------------------------------------------------------------
+// ContactLaw<Normal, Damping, Tangential, Rolling, Clamp>: each part is stateless, reads its
+// parameters from materials::PairConstants (one struct per pair of materials) and declares its
+// history size as a constexpr. The geometry shared by all parts (n, d_n, sqrt(R* d_n), m*, v_n,
+// v_t) is computed once per contact in Kinematics. A part a scene does not need is a "none" part
+// (NoDamping, NoFriction, NoRolling) compiled out by `if constexpr`.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products (declared in Core, defined here)
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include "millscope/materials.hpp"
+
+namespace millscope::contact {
+
+using Vec3 = Eigen::Vector3d;
+using materials::PairConstants;
+
+/// What every part of the law sees of one contact, computed once per contact and step.
+struct Kinematics {
+  Vec3 n;          // unit normal, from j to i
+  double d_n;      // overlap, m (> 0)
+  double sqrt_rd;  // sqrt(R* d_n), m: shared by S_n (4), S_t (6) and F_ne (1)
+  double m_star;   // equivalent mass, kg
+  double v_n;      // v_rel . n, m/s (< 0 approaching)
+  Vec3 v_t;        // v_rel - v_n n, m/s
+};
+
+/// Builds the kinematics from the normal, overlap, R*, m* and the contact-point relative velocity.
+inline Kinematics make_kinematics(const Vec3& n, double d_n, double r_star, double m_star,
+                                  const Vec3& v_rel) {
+  const double v_n = v_rel.dot(n);
+  return Kinematics{n, d_n, std::sqrt(r_star * d_n), m_star, v_n, v_rel - v_n * n};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Normal elastic parts
+// ---------------------------------------------------------------------------------------------
+
+/// Hertz: S_n = 2 E* sqrt(R* d_n) (4); F_ne = 4/3 E* sqrt(R*) d_n^(3/2) = 2/3 S_n d_n (1).
+struct HertzElastic {
+  static constexpr std::size_t history_size = 0;
+  struct Result {
+    double force;      // F_ne, N, along n (>= 0)
+    double stiffness;  // S_n, N/m
+  };
+  static Result evaluate(const PairConstants& p, const Kinematics& k) {
+    const double s_n = 2.0 * p.e_star * k.sqrt_rd;   // (4)
+    return Result{(2.0 / 3.0) * s_n * k.d_n, s_n};   // (1)
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Damping parts: the viscous coefficient of a spring of stiffness S on the mass m*
+// ---------------------------------------------------------------------------------------------
+
+/// gamma(S) = -2 sqrt(5/6) beta sqrt(S m*) >= 0, used by F_nd (2) and F_td (7).
+struct ViscousDamping {
+  static constexpr std::size_t history_size = 0;
+  static constexpr bool active = true;
+  static double gamma(const PairConstants& p, double stiffness, double m_star) {
+    return p.damping_factor * std::sqrt(stiffness * m_star);
+  }
+};
+
+/// No damping (elastic contact, e = 1 exactly, whatever the pair says).
+struct NoDamping {
+  static constexpr std::size_t history_size = 0;
+  static constexpr bool active = false;
+  static double gamma(const PairConstants&, double, double) { return 0.0; }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Tangential parts
+// ---------------------------------------------------------------------------------------------
+
+struct TangentialResult {
+  Vec3 force;    // F_t on i, N (in the tangent plane)
+  bool sliding;  // the Coulomb limit (8) was reached this step
+};
+
+/// Mindlin no-slip spring with damping and Coulomb limit; history: d_t (3 doubles, m).
+///   S_t = 8 G* sqrt(R* d_n) (6); F_te = -S_t d_t (5); F_td = -gamma(S_t) v_t (7);
+///   |F_t| <= mu |F_n| (8).
+/// Each step the stored d_t is first turned into the current tangent plane (its normal component
+/// projected out, its length kept), then advanced by v_t dt. When the trial force
+/// F_te + F_td exceeds mu |F_n|, F_t is scaled down to mu |F_n| along the trial force and d_t is
+/// set to -F_t / S_t, so that the spring alone carries the Coulomb force (DESIGN.md section 2).
+/// The bound uses |F_n|, as LIGGGHTS and LAMMPS do: in the tensile tail of a damped, unclamped
+/// contact friction still acts, so an impact that slides throughout gets a tangential impulse of
+/// mu sum |F_n| dt, which is 7 % (e = 0.5) to 21 % (e = 0.2) above mu times the net normal
+/// impulse. With NormalClamp::nonnegative the two agree (Coulomb's impact law).
+struct MindlinFriction {
+  static constexpr std::size_t history_size = 3;
+  static constexpr bool active = true;
+
+  template <class Damping>
+  static TangentialResult evaluate(const PairConstants& p, const Kinematics& k, double f_n,
+                                   double dt, double* history) {
+    Eigen::Map<Vec3> d_t(history);
+    // Rotate into the current tangent plane, keeping the magnitude.
+    const double before2 = d_t.squaredNorm();
+    d_t -= d_t.dot(k.n) * k.n;
+    const double after2 = d_t.squaredNorm();
+    // after2 == 0 only for an empty (or exactly normal) history: nothing to keep.
+    d_t *= after2 > 0.0 ? std::sqrt(before2 / after2) : 0.0;
+    d_t += k.v_t * dt;
+
+    const double s_t = 8.0 * p.g_star * k.sqrt_rd;  // (6)
+    Vec3 f_t = -s_t * d_t;                          // (5)
+    if constexpr (Damping::active) f_t -= Damping::gamma(p, s_t, k.m_star) * k.v_t;  // (7)
+
+    const double limit = p.friction * std::abs(f_n);  // (8)
+    const double f2 = f_t.squaredNorm();
+    const bool sliding = f2 > limit * limit;
+    if (sliding) {
+      f_t *= limit / std::sqrt(f2);  // f2 > limit^2 >= 0, so f2 > 0
+      d_t = -f_t / s_t;              // s_t > 0 whenever d_n > 0
+    }
+    return TangentialResult{f_t, sliding};
+  }
+};
+
+/// No friction: no tangential force, no history, no torque.
+struct NoFriction {
+  static constexpr std::size_t history_size = 0;
+  static constexpr bool active = false;
+};
+
+/// No rolling resistance (the only rolling part so far; DESIGN.md section 2).
+struct NoRolling {
+  static constexpr std::size_t history_size = 0;
+  static constexpr bool active = false;
+};
+
+/// Whether the total normal force may pull the bodies together at the end of a damped contact.
+enum class NormalClamp {
+  none,         // F_n = F_ne + F_nd as it comes (default; as EDEM and LIGGGHTS)
+  nonnegative,  // F_n = max(F_ne + F_nd, 0)
+};
+
+/// The force on i of one contact.
+struct ContactForce {
+  Vec3 force;       // F_n n + F_t, N
+  Vec3 tangential;  // F_t, N (zero without friction)
+  double normal;    // F_n, N (after the optional clamp)
+  bool sliding;     // the Coulomb limit was reached this step
+};
+
+/// A contact law composed of parts. history_size doubles per contact hold the state of the
+/// parts that have one (the tangential part's d_t first).
+template <class Normal, class Damping, class Tangential, class Rolling = NoRolling,
+          NormalClamp Clamp = NormalClamp::none>
+struct ContactLaw {
+  static_assert(!Rolling::active, "rolling resistance is not implemented yet");
+  using normal_part = Normal;
+  using damping_part = Damping;
+  using tangential_part = Tangential;
+  using rolling_part = Rolling;
+  static constexpr NormalClamp clamp = Clamp;
+  static constexpr bool has_friction = Tangential::active;
+  static constexpr std::size_t tangential_offset = Normal::history_size + Damping::history_size;
+  static constexpr std::size_t history_size =
+      tangential_offset + Tangential::history_size + Rolling::history_size;
+
+  /// The force on i given the contact kinematics (d_n > 0); dt is the step over which the
+  /// tangential history advances. `history` points at history_size doubles (may be null when 0).
+  static ContactForce evaluate(const PairConstants& p, const Kinematics& k, double dt,
+                               double* history) {
+    const auto elastic = Normal::evaluate(p, k);
+    double f_n = elastic.force;
+    if constexpr (Damping::active) f_n -= Damping::gamma(p, elastic.stiffness, k.m_star) * k.v_n;
+    if constexpr (Clamp == NormalClamp::nonnegative) f_n = std::max(f_n, 0.0);
+
+    ContactForce c{f_n * k.n, Vec3::Zero(), f_n, false};
+    if constexpr (Tangential::active) {
+      const TangentialResult t =
+          Tangential::template evaluate<Damping>(p, k, f_n, dt, history + tangential_offset);
+      c.force += t.force;
+      c.tangential = t.force;
+      c.sliding = t.sliding;
+    } else {
+      (void)dt;
+      (void)history;
+    }
+    return c;
+  }
+
+  /// Clears the history of a contact that has ended.
+  static void reset(double* history) {
+    for (std::size_t i = 0; i < history_size; ++i) history[i] = 0.0;
+  }
+};
+
+/// The paper's law: Hertz-Mindlin no-slip with damping, unclamped.
+using HertzMindlin = ContactLaw<HertzElastic, ViscousDamping, MindlinFriction>;
+/// The same without friction (mu = 0 for every pair): no tangential history or torque.
+using HertzMindlinFrictionless = ContactLaw<HertzElastic, ViscousDamping, NoFriction>;
+/// Clamped variants.
+using HertzMindlinClamped =
+    ContactLaw<HertzElastic, ViscousDamping, MindlinFriction, NoRolling, NormalClamp::nonnegative>;
+using HertzMindlinFrictionlessClamped =
+    ContactLaw<HertzElastic, ViscousDamping, NoFriction, NoRolling, NormalClamp::nonnegative>;
+
+// ---------------------------------------------------------------------------------------------
+// Whole-pair evaluation: geometry, contact-point velocity, force and torques
+// ---------------------------------------------------------------------------------------------
+
+/// A sphere as the pair functions see it (position, velocity, angular velocity, radius, mass).
+struct SphereState {
+  Vec3 x;
+  Vec3 v;
+  Vec3 w;
+  double radius;
+  double mass;
+};
+
+/// Force and torque contributions of one pair.
+struct PairForce {
+  bool touching;    // d_n > 0; when false every other field is zero and the history was reset
+  double overlap;   // d_n, m
+  Vec3 n;           // unit normal from j to i
+  Vec3 force_i;     // force on i, N (on j: -force_i)
+  Vec3 torque_i;    // torque on i about its centre, N m
+  Vec3 torque_j;    // torque on j about its centre, N m (walls: ignore)
+  double normal;    // F_n, N
+  Vec3 tangential;  // F_t on i, N
+  bool sliding;
+};
+
+namespace detail {
+
+template <class Law>
+inline PairForce finish(const PairConstants& p, const Vec3& n, double d_n, double r_star,
+                        double m_star, const Vec3& v_rel, double r_i, double r_j, double dt,
+                        double* history) {
+  const Kinematics k = make_kinematics(n, d_n, r_star, m_star, v_rel);
+  const ContactForce c = Law::evaluate(p, k, dt, history);
+  PairForce out{true, d_n, n, c.force, Vec3::Zero(), Vec3::Zero(), c.normal, c.tangential,
+                c.sliding};
+  if constexpr (Law::has_friction) {
+    const Vec3 nxf = n.cross(c.tangential);
+    out.torque_i = -r_i * nxf;  // (-r_i n) x F_t
+    out.torque_j = -r_j * nxf;  // (r_j n) x (-F_t)
+  }
+  return out;
+}
+
+inline PairForce apart(const Vec3& n, double d_n) {
+  return PairForce{false,          d_n, n, Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), 0.0,
+                   Vec3::Zero(), false};
+}
+
+}  // namespace detail
+
+/// Two spheres i and j. R* and m* are computed from the states; dt is the step over which the
+/// tangential history advances (the engine passes its half-step velocities in the states).
+/// When the spheres do not touch, the history is reset and a zero force returned.
+template <class Law>
+inline PairForce sphere_sphere(const PairConstants& p, const SphereState& i, const SphereState& j,
+                               double dt, double* history) {
+  const Vec3 d = i.x - j.x;
+  const double dist = d.norm();
+  const double d_n = i.radius + j.radius - dist;
+  if (!(d_n > 0.0) || !(dist > 0.0)) {
+    Law::reset(history);
+    return detail::apart(Vec3::Zero(), d_n);
+  }
+  const Vec3 n = d / dist;
+  const Vec3 v_rel = i.v + i.w.cross(-i.radius * n) - (j.v + j.w.cross(j.radius * n));
+  return detail::finish<Law>(p, n, d_n, materials::reduced(i.radius, j.radius),
+                             materials::reduced(i.mass, j.mass), v_rel, i.radius, j.radius, dt,
+                             history);
+}
+
+/// Sphere i against a wall. The wall's geometry gives n (unit, from the wall into the sphere)
+/// and the overlap d_n = r_i - (distance from the centre to the wall); `wall_velocity` is the
+/// velocity of the wall's material point at the contact (w_drum x r_c for a rotating drum).
+/// R* = r_i and m* = m_i. torque_j is zero. When d_n <= 0 the history is reset.
+template <class Law>
+inline PairForce sphere_wall(const PairConstants& p, const SphereState& i, const Vec3& n,
+                             double d_n, const Vec3& wall_velocity, double dt, double* history) {
+  if (!(d_n > 0.0)) {
+    Law::reset(history);
+    return detail::apart(n, d_n);
+  }
+  const Vec3 v_rel = i.v + i.w.cross(-i.radius * n) - wall_velocity;
+  PairForce out = detail::finish<Law>(p, n, d_n, i.radius, i.mass, v_rel, i.radius, 0.0, dt,
+                                      history);
+  out.torque_j = Vec3::Zero();
+  return out;
+}
+
+}  // namespace millscope::contact
