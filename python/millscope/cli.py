@@ -63,7 +63,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     from .analysis import analyze_block
     from .drivetrain import DriveTrain, decimate
     from .record import TorqueRecord
-    from .spectral import band_stop, spectrum
+    from .spectral import RemoveItem, band_stop, spectrum
 
     record = TorqueRecord.load(args.file)
     lines: list[float] = []
@@ -96,7 +96,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     fig = plots.plot_spectrum(spec, lth_hz=result.lth.frequency_hz, lines_hz=list(lines),
                               title=f"{stem}: torque spectrum")
     written = [plots.save_figure(fig, out / f"{stem}_spectrum.png")]
-    remove = ["mean", result.lth.frequency_hz, *result.lines_hz]
+    remove: list[RemoveItem] = ["mean", result.lth.frequency_hz, *result.lines_hz]
     filtered = band_stop(block, remove, bandwidth=args.bandwidth, window="rectangular")
     fig = plots.plot_filtered(block, filtered)
     written.append(plots.save_figure(fig, out / f"{stem}_filtered.png"))

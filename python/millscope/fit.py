@@ -12,7 +12,6 @@ import json
 import math
 import os
 import warnings
-from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,7 +22,7 @@ from scipy import stats
 
 from ._files import atomic_write, read_json
 from .record import TorqueRecord
-from .spectral import lifter_harmonic_hz, spectral_energy
+from .spectral import RemoveItem, lifter_harmonic_hz, spectral_energy
 
 __all__ = ["LogFit", "log_fit", "Calibration", "FillEstimate", "estimate_fill",
            "OutsideCalibrationWarning"]
@@ -196,7 +195,7 @@ class Calibration:
         lifter_harmonic_hz(self.lifters, self.rotation_hz)  # validates both
 
     @property
-    def remove(self) -> list[str | float]:
+    def remove(self) -> list[RemoveItem]:
         """What the analysis removes: the mean, the LTH and the extra lines."""
         return ["mean", lifter_harmonic_hz(self.lifters, self.rotation_hz), *self.extra_lines_hz]
 
@@ -251,7 +250,7 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
         raise ValueError(f"record is {record.duration_s:g} s long but the calibration was made "
                          f"on blocks of block_s = {cal.block_s:g} s; pass a block of that length")
     e = spectral_energy(record, cal.remove, bandwidth=cal.bandwidth,
-                        window=cal.window)  # type: ignore[arg-type]
+                        window=cal.window)  # type: ignore[arg-type]  # a str, checked at run time
     y = e.energy / cal.reference_energy
     level = cal.fit.inverse(y)
     half = cal.fit.prediction_half_width(float(level), confidence,
@@ -268,7 +267,7 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
     return FillEstimate(level=float(level), interval=interval, energy_pu=y, energy=e.energy)
 
 
-def per_unit(energies: Sequence[float]) -> NDArray[np.float64]:
+def per_unit(energies: ArrayLike) -> NDArray[np.float64]:
     """Energies divided by the largest of the group (DESIGN.md section 4)."""
     e = np.asarray(energies, dtype=np.float64)
     if e.size == 0 or not np.all(np.isfinite(e)) or e.max() <= 0:

@@ -42,7 +42,12 @@ class _NamedLine(Protocol):
 
 LineSpec = float | tuple[str, float] | _NamedLine
 
-_GRID = {"alpha": 0.35, "lw": 0.6}
+
+def _grid(ax: Axes) -> None:
+    """The light grid every figure uses."""
+    ax.grid(True, alpha=0.35, lw=0.6)
+
+
 _MARKERS = ("o", "s", "^", "D", "v", "P", "X", "<", ">")
 _LTH_COLOR = "tab:red"
 _LINE_COLOR = "0.45"
@@ -141,7 +146,7 @@ def plot_torque(record: TorqueRecord, *, ax: Axes | None = None, title: str | No
     ax.set_ylabel("torque (N m)")
     ax.set_xlim(record.time_s[0], record.time_s[-1])
     _set_title(ax, title, "Drive torque", made)
-    ax.grid(**_GRID)
+    _grid(ax)
     ax.legend(loc="upper right", fontsize="small")
     return fig
 
@@ -191,7 +196,7 @@ def plot_filtered(original: TorqueRecord, filtered: TorqueRecord, *, ax: Axes | 
     ax.set_ylabel("torque fluctuation (N m)")
     ax.set_xlim(original.time_s[0], original.time_s[-1])
     _set_title(ax, title, "Torque before and after removing the mean and the lines", made)
-    ax.grid(**_GRID)
+    _grid(ax)
     ax.legend(loc="upper right", fontsize="small")
     return fig
 
@@ -284,7 +289,7 @@ def plot_spectrum(spec: Spectrum, *, lth_hz: float | None = None,
     ax.set_ylabel("amplitude (N m)")
     _set_title(ax, title, f"Torque spectrum ({spec.window} window, "
                           f"df = {spec.resolution_hz:.3g} Hz)", made)
-    ax.grid(**_GRID)
+    _grid(ax)
     if label is not None:
         ax.legend(fontsize="small")
     return fig
@@ -444,7 +449,7 @@ def plot_energy_fit(levels: ArrayLike, energies_pu: ArrayLike, fit: LogFit | Non
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     _set_title(ax, title, "Spectral energy against filling level", made)
-    ax.grid(True, **_GRID)
+    _grid(ax)
     ax.legend(fontsize="small")
     return fig
 
