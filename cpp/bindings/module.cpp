@@ -12,12 +12,14 @@ namespace py = pybind11;
 namespace millscope::bindings {
 void register_dsp(py::module_& m);
 void register_contact(py::module_& m);
+void register_drum(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "millscope C++ core (private; use the millscope package)";
   millscope::bindings::register_dsp(m);
   millscope::bindings::register_contact(m);
+  millscope::bindings::register_drum(m);
 
   m.def("build_info", [] {
     py::dict info;
