@@ -13,6 +13,7 @@ namespace millscope::bindings {
 void register_dsp(py::module_& m);
 void register_contact(py::module_& m);
 void register_drum(py::module_& m);
+void register_neighbors(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -20,6 +21,7 @@ PYBIND11_MODULE(_core, m) {
   millscope::bindings::register_dsp(m);
   millscope::bindings::register_contact(m);
   millscope::bindings::register_drum(m);
+  millscope::bindings::register_neighbors(m);
 
   m.def("build_info", [] {
     py::dict info;

@@ -1,0 +1,191 @@
+// Neighbour search: a cell grid and a half Verlet list with a skin, with per-pair contact
+// history carried across rebuilds (DESIGN.md sections 1 and 7).
+//
+// The list holds every pair i < j whose surfaces are closer than the skin, in compressed rows:
+// the partners of i are partner[start[i] .. start[i+1]), sorted. Each listed pair owns
+// `history_size` doubles in an array aligned with the list, so the hot loop reads a pair's
+// history next to its partner index, without lookups. A rebuild moves each surviving pair's
+// history to its new slot (a binary search in the old, sorted row) and zeroes new pairs.
+// Rebuilding is O(N) for a bounded density: particles are binned into cubic cells at least
+// 2 r_max + skin wide, and each cell looks at itself and its 26 neighbours.
+// Optionally periodic along z with period `period_z` (minimum image).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace millscope::neighbors {
+
+class VerletList {
+ public:
+  /// skin: extra gap kept in the list, m; history_size: doubles of history per pair;
+  /// period_z: the period along z for periodic ends, or 0 for none, m.
+  VerletList(double skin, std::size_t history_size, double period_z = 0.0)
+      : skin_(skin), history_size_(history_size), period_z_(period_z) {
+    auto fail = [](const char* name, double value, const char* range) {
+      std::ostringstream msg;
+      msg << name << " = " << value << " m is not valid; it must be " << range;
+      throw std::invalid_argument(msg.str());
+    };
+    if (!(skin > 0.0) || !std::isfinite(skin)) fail("skin", skin, "> 0");
+    if (!(period_z >= 0.0) || !std::isfinite(period_z))
+      fail("period_z", period_z, ">= 0 (0: not periodic)");
+  }
+
+  /// Rebuilds the list for n spheres (centres x, y, z, radii r), keeping the history of pairs
+  /// that stay listed.
+  void build(const double* x, const double* y, const double* z, const double* r, std::size_t n) {
+    std::vector<std::uint32_t> old_start = std::move(start_);
+    std::vector<std::uint32_t> old_partner = std::move(partner_);
+    std::vector<double> old_history = std::move(history_);
+
+    bin(x, y, z, r, n);
+    start_.assign(n + 1, 0);
+    partner_.clear();
+    std::vector<std::uint32_t> row;
+    for (std::size_t i = 0; i < n; ++i) {
+      row.clear();
+      const int cx = cell_coord(x[i], lo_[0], 0), cy = cell_coord(y[i], lo_[1], 1),
+                cz = cell_coord(z[i], lo_[2], 2);
+      for (int dz = -1; dz <= 1; ++dz) {
+        int kz = cz + dz;
+        if (periodic()) {
+          kz = (kz % dims_[2] + dims_[2]) % dims_[2];
+        } else if (kz < 0 || kz >= dims_[2]) {
+          continue;
+        }
+        for (int dy = -1; dy <= 1; ++dy) {
+          const int ky = cy + dy;
+          if (ky < 0 || ky >= dims_[1]) continue;
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int kx = cx + dx;
+            if (kx < 0 || kx >= dims_[0]) continue;
+            const std::size_t cell = index(kx, ky, kz);
+            for (std::uint32_t j = cell_start_[cell]; j < cell_start_[cell + 1]; ++j) {
+              const std::uint32_t p = cell_particles_[j];
+              if (p <= i) continue;
+              if (gap(x, y, z, r, i, p) < skin_) row.push_back(p);
+            }
+          }
+        }
+      }
+      std::sort(row.begin(), row.end());
+      row.erase(std::unique(row.begin(), row.end()), row.end());  // tiny periodic grids
+      partner_.insert(partner_.end(), row.begin(), row.end());
+      start_[i + 1] = static_cast<std::uint32_t>(partner_.size());
+    }
+
+    history_.assign(partner_.size() * history_size_, 0.0);
+    if (history_size_ > 0 && old_start.size() == n + 1) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto first = old_partner.begin() + old_start[i];
+        const auto last = old_partner.begin() + old_start[i + 1];
+        for (std::uint32_t s = start_[i]; s < start_[i + 1]; ++s) {
+          const auto it = std::lower_bound(first, last, partner_[s]);
+          if (it == last || *it != partner_[s]) continue;
+          const auto old_slot = static_cast<std::size_t>(it - old_partner.begin());
+          std::copy_n(old_history.begin() + static_cast<std::ptrdiff_t>(old_slot * history_size_),
+                      history_size_,
+                      history_.begin() + static_cast<std::ptrdiff_t>(s * history_size_));
+        }
+      }
+    }
+    ++builds_;
+  }
+
+  std::size_t pairs() const { return partner_.size(); }
+  const std::vector<std::uint32_t>& start() const { return start_; }
+  const std::vector<std::uint32_t>& partner() const { return partner_; }
+  std::vector<double>& history() { return history_; }
+  const std::vector<double>& history() const { return history_; }
+  std::size_t history_size() const { return history_size_; }
+  double skin() const { return skin_; }
+  long builds() const { return builds_; }
+
+  /// z displacement by the minimum image for periodic ends, m.
+  double wrap_dz(double dz) const {
+    return periodic() ? dz - period_z_ * std::round(dz / period_z_) : dz;
+  }
+
+ private:
+  bool periodic() const { return period_z_ > 0.0; }
+
+  double gap(const double* x, const double* y, const double* z, const double* r, std::size_t i,
+             std::size_t j) const {
+    const double dx = x[i] - x[j], dy = y[i] - y[j], dz = wrap_dz(z[i] - z[j]);
+    return std::sqrt(dx * dx + dy * dy + dz * dz) - r[i] - r[j];
+  }
+
+  int cell_coord(double v, double lo, int axis) const {
+    int k = static_cast<int>(std::floor((v - lo) / cell_size_[axis]));
+    if (axis == 2 && periodic()) return (k % dims_[2] + dims_[2]) % dims_[2];
+    return std::clamp(k, 0, dims_[axis] - 1);
+  }
+
+  std::size_t index(int kx, int ky, int kz) const {
+    return (static_cast<std::size_t>(kz) * static_cast<std::size_t>(dims_[1]) +
+            static_cast<std::size_t>(ky)) * static_cast<std::size_t>(dims_[0]) +
+           static_cast<std::size_t>(kx);
+  }
+
+  // Counting sort of the particles into cells.
+  void bin(const double* x, const double* y, const double* z, const double* r, std::size_t n) {
+    double r_max = 0.0;
+    double hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    lo_[0] = lo_[1] = lo_[2] = HUGE_VAL;
+    const double* c[3] = {x, y, z};
+    for (std::size_t i = 0; i < n; ++i) {
+      r_max = std::max(r_max, r[i]);
+      for (int a = 0; a < 3; ++a) {
+        lo_[a] = std::min(lo_[a], c[a][i]);
+        hi[a] = std::max(hi[a], c[a][i]);
+      }
+    }
+    if (n == 0) lo_[0] = lo_[1] = lo_[2] = hi[0] = hi[1] = hi[2] = 0.0;
+    const double min_cell = 2.0 * r_max + skin_;
+    for (int a = 0; a < 3; ++a) {
+      double extent = hi[a] - lo_[a];
+      if (a == 2 && periodic()) {
+        lo_[2] = 0.0;
+        extent = period_z_;
+      }
+      dims_[a] = std::max(1, static_cast<int>(std::floor(extent / min_cell)));
+      cell_size_[a] = std::max(extent / dims_[a], min_cell);
+    }
+    // With fewer than 3 cells along a periodic axis, neighbouring cells would be seen twice;
+    // the unique() in build() removes the duplicates.
+    const std::size_t cells = static_cast<std::size_t>(dims_[0]) * static_cast<std::size_t>(dims_[1]) *
+                              static_cast<std::size_t>(dims_[2]);
+    cell_start_.assign(cells + 1, 0);
+    std::vector<std::size_t> cell_of(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      cell_of[i] = index(cell_coord(x[i], lo_[0], 0), cell_coord(y[i], lo_[1], 1),
+                         cell_coord(z[i], lo_[2], 2));
+      ++cell_start_[cell_of[i] + 1];
+    }
+    for (std::size_t k = 0; k < cells; ++k) cell_start_[k + 1] += cell_start_[k];
+    cell_particles_.assign(n, 0);
+    std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      cell_particles_[fill[cell_of[i]]++] = static_cast<std::uint32_t>(i);
+  }
+
+  double skin_;
+  std::size_t history_size_;
+  double period_z_;
+  long builds_ = 0;
+  double lo_[3] = {0, 0, 0};
+  double cell_size_[3] = {1, 1, 1};
+  int dims_[3] = {1, 1, 1};
+  std::vector<std::uint32_t> cell_start_, cell_particles_;
+  std::vector<std::uint32_t> start_, partner_;
+  std::vector<double> history_;
+};
+
+}  // namespace millscope::neighbors

@@ -1,0 +1,79 @@
+"""Neighbour list: the same pairs as a brute-force O(N^2) search, history kept across rebuilds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.distance import pdist, squareform
+
+from millscope import _core
+
+
+def random_spheres(n: int, seed: int, box=(0.3, 0.3, 0.1)):
+    rng = np.random.default_rng(seed)
+    pos = rng.uniform(0, 1, (n, 3)) * np.array(box)
+    r = rng.choice([0.006, 0.0125], n)
+    return pos, r
+
+
+def brute_force_pairs(pos: np.ndarray, r: np.ndarray, skin: float, period_z: float = 0.0):
+    d = pos[:, None, :] - pos[None, :, :]
+    if period_z:
+        d[..., 2] -= period_z * np.round(d[..., 2] / period_z)
+    gap = np.sqrt(np.sum(d**2, axis=-1)) - r[:, None] - r[None, :]
+    i, j = np.nonzero(np.triu(gap < skin, k=1))
+    return set(zip(i.tolist(), j.tolist(), strict=True))
+
+
+@pytest.mark.parametrize(("n", "seed"), [(1, 0), (2, 1), (300, 2), (1500, 3)])
+def test_pairs_equal_brute_force(n: int, seed: int) -> None:
+    pos, r = random_spheres(n, seed)
+    skin = 0.003
+    nl = _core.VerletList(skin, 3)
+    nl.build(*pos.T.copy(), r)
+    listed = {tuple(p) for p in nl.pairs().tolist()}
+    assert len(listed) == len(nl.pairs())  # no duplicates
+    assert listed == brute_force_pairs(pos, r, skin)
+    # and scipy's distances agree on the closest listed pair
+    if listed:
+        dist = squareform(pdist(pos))
+        i, j = min(listed, key=lambda p: dist[p] - r[p[0]] - r[p[1]])
+        assert dist[i, j] - r[i] - r[j] < skin
+
+
+@pytest.mark.parametrize("period_z", [0.1, 0.03])
+def test_periodic_ends_use_the_minimum_image(period_z: float) -> None:
+    pos, r = random_spheres(400, 7, box=(0.2, 0.2, period_z))
+    nl = _core.VerletList(0.002, 0, period_z)
+    nl.build(*pos.T.copy(), r)
+    listed = {tuple(p) for p in nl.pairs().tolist()}
+    assert listed == brute_force_pairs(pos, r, 0.002, period_z)
+    assert listed != brute_force_pairs(pos, r, 0.002)  # pairs across the ends exist
+
+
+def test_history_follows_its_pair_across_rebuilds() -> None:
+    pos, r = random_spheres(600, 11)
+    nl = _core.VerletList(0.003, 2)
+    nl.build(*pos.T.copy(), r)
+    pairs0 = nl.pairs()
+    nl.history = np.column_stack([pairs0[:, 0] * 1e4 + pairs0[:, 1], -pairs0[:, 1]])
+    moved = pos + np.random.default_rng(12).normal(0, 0.002, pos.shape)
+    nl.build(*moved.T.copy(), r)
+    pairs1, h = nl.pairs(), nl.history
+    old = {tuple(p) for p in pairs0.tolist()}
+    kept = np.array([tuple(p) in old for p in pairs1.tolist()])
+    assert kept.any() and (~kept).any()  # some pairs survive, some are new
+    np.testing.assert_array_equal(h[kept, 0], pairs1[kept, 0] * 1e4 + pairs1[kept, 1])
+    np.testing.assert_array_equal(h[kept, 1], -pairs1[kept, 1])
+    np.testing.assert_array_equal(h[~kept], 0.0)
+    assert nl.builds == 2
+
+
+def test_bad_arguments() -> None:
+    with pytest.raises(ValueError, match="skin = -0.001 m is not valid; it must be > 0"):
+        _core.VerletList(-0.001, 3)
+    with pytest.raises(ValueError, match="period_z = -1 m is not valid"):
+        _core.VerletList(0.001, 3, -1.0)
+    nl = _core.VerletList(0.001, 3)
+    with pytest.raises(ValueError, match="equal length"):
+        nl.build(np.zeros(3), np.zeros(2), np.zeros(3), np.ones(3))
