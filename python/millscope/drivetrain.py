@@ -69,6 +69,7 @@ import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
 from ._files import atomic_write, read_json
+from ._samples import check_samples
 
 __all__ = ["DriveTrain", "GearStage", "InterferenceLine", "Motor", "decimate"]
 
@@ -542,31 +543,8 @@ def decimate(time_s: ArrayLike, torque: ArrayLike, target_hz: float, *,
     """
     t = np.asarray(time_s, dtype=np.float64)
     x = np.asarray(torque, dtype=np.float64)
-    if t.ndim != 1 or x.ndim != 1:
-        raise ValueError(f"decimate: time_s and torque must be 1-D arrays; got shapes {t.shape} "
-                         f"and {x.shape}")
-    if t.size != x.size:
-        raise ValueError(f"decimate: time_s has {t.size} samples but torque has {x.size}; they "
-                         "must match")
-    if t.size < 2:
-        raise ValueError(f"decimate: at least 2 samples are needed; got {t.size}")
-    for name, values in (("time_s", t), ("torque", x)):
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            i = int(bad[0])
-            raise ValueError(f"decimate: {name}[{i}] = {float(values[i])!r} is not finite; "
-                             "every sample must be a finite number")
-    steps = np.diff(t)
-    if np.any(steps <= 0):
-        i = int(np.flatnonzero(steps <= 0)[0])
-        raise ValueError(f"decimate: time_s is not strictly increasing at sample {i + 1} "
-                         f"({float(t[i])!r} s then {float(t[i + 1])!r} s)")
+    check_samples(t, x, uniform_rtol, "decimate", torque_name="torque")
     dt = (t[-1] - t[0]) / (t.size - 1)
-    worst = int(np.argmax(np.abs(steps - dt)))
-    if abs(steps[worst] - dt) > uniform_rtol * dt:
-        raise ValueError(f"decimate: sampling is not uniform: step {worst + 1} is "
-                         f"{float(steps[worst])!r} s against a mean step of {float(dt)!r} s "
-                         f"(allowed deviation uniform_rtol = {uniform_rtol:g} relative)")
     source_hz = 1.0 / dt
     if not (_is_real(target_hz) and 0 < float(target_hz) < source_hz):
         raise ValueError(f"target_hz = {target_hz!r} is not valid; it must be in "

@@ -28,48 +28,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._files import atomic_write
+from ._samples import RecordError, check_samples
 
 __all__ = ["TorqueRecord", "RecordError"]
 
 TIME_COLUMN = "time_s"
 TORQUE_COLUMN = "torque_Nm"
 _META_PREFIX = "# meta:"
-
-
-class RecordError(ValueError):
-    """A torque record or file that cannot be used; the message says what and where."""
-
-
-def _check_samples(time_s: NDArray[np.float64], torque: NDArray[np.float64], uniform_rtol: float,
-                   where: str) -> None:
-    if time_s.ndim != 1 or torque.ndim != 1:
-        raise RecordError(f"{where}: time_s and torque_Nm must be 1-D arrays; got shapes "
-                          f"{time_s.shape} and {torque.shape}")
-    if time_s.shape != torque.shape:
-        raise RecordError(f"{where}: time_s has {time_s.size} samples but torque_Nm has "
-                          f"{torque.size}; they must match")
-    if time_s.size < 2:
-        raise RecordError(f"{where}: a record needs at least 2 samples; got {time_s.size}")
-    for name, values in ((TIME_COLUMN, time_s), (TORQUE_COLUMN, torque)):
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            i = int(bad[0])
-            raise RecordError(f"{where}: {name}[{i}] = {float(values[i])!r} is not finite; every "
-                              f"sample must be a finite number ({bad.size} such samples)")
-    steps = np.diff(time_s)
-    if np.any(steps <= 0):
-        i = int(np.flatnonzero(steps <= 0)[0])
-        raise RecordError(f"{where}: time_s is not strictly increasing at sample {i + 1} "
-                          f"({float(time_s[i])!r} s then {float(time_s[i + 1])!r} s)")
-    dt = (time_s[-1] - time_s[0]) / (time_s.size - 1)
-    deviation = np.abs(steps - dt)
-    worst = int(np.argmax(deviation))
-    if deviation[worst] > uniform_rtol * dt:
-        raise RecordError(
-            f"{where}: sampling is not uniform: step {worst + 1} is {float(steps[worst])!r} s "
-            f"against a mean step of {float(dt)!r} s (allowed deviation uniform_rtol = "
-            f"{uniform_rtol:g} relative); "
-            "resample the record first")
 
 
 class TorqueRecord:
@@ -99,7 +64,7 @@ class TorqueRecord:
                  meta: Mapping[str, Any] | None = None, *, uniform_rtol: float = 1e-6) -> None:
         time = np.array(time_s, dtype=np.float64)
         torque = np.array(torque_Nm, dtype=np.float64)
-        _check_samples(time, torque, uniform_rtol, "TorqueRecord")
+        check_samples(time, torque, uniform_rtol, "TorqueRecord")
         time.flags.writeable = False
         torque.flags.writeable = False
         self._time = time
@@ -279,5 +244,5 @@ class TorqueRecord:
                    meta: dict[str, Any], where: str, uniform_rtol: float = 1e-6) -> TorqueRecord:
         time = np.asarray(time, dtype=np.float64)
         torque = np.asarray(torque, dtype=np.float64)
-        _check_samples(time, torque, uniform_rtol, where)
+        check_samples(time, torque, uniform_rtol, where)
         return cls(time, torque, meta, uniform_rtol=uniform_rtol)
