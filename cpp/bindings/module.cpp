@@ -14,6 +14,7 @@ void register_dsp(py::module_& m);
 void register_contact(py::module_& m);
 void register_drum(py::module_& m);
 void register_neighbors(py::module_& m);
+void register_engine(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -22,6 +23,7 @@ PYBIND11_MODULE(_core, m) {
   millscope::bindings::register_contact(m);
   millscope::bindings::register_drum(m);
   millscope::bindings::register_neighbors(m);
+  millscope::bindings::register_engine(m);
 
   m.def("build_info", [] {
     py::dict info;

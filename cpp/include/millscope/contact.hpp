@@ -85,6 +85,10 @@ struct HertzElastic {
     const double s_n = 2.0 * p.e_star * k.sqrt_rd;   // (4)
     return Result{(2.0 / 3.0) * s_n * k.d_n, s_n};   // (1)
   }
+  /// Elastic energy stored at overlap d_n, the integral of (1): 8/15 E* sqrt(R*) d_n^(5/2), J.
+  static double energy(const PairConstants& p, double sqrt_rd, double d_n) {
+    return (8.0 / 15.0) * p.e_star * sqrt_rd * d_n * d_n;
+  }
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -112,8 +116,12 @@ struct NoDamping {
 // ---------------------------------------------------------------------------------------------
 
 struct TangentialResult {
-  Vec3 force;    // F_t on i, N (in the tangent plane)
-  bool sliding;  // the Coulomb limit (8) was reached this step
+  Vec3 force;            // F_t on i, N (in the tangent plane)
+  bool sliding;          // the Coulomb limit (8) was reached this step
+  double damping_power;  // gamma_t |v_t|^2 while sticking, W (>= 0); 0 while sliding
+  double friction_loss;  // energy lost this step beyond the damping, J: the tangential work
+                         // -F_t . v_t dt less the change of the spring's energy, less the
+                         // damping's share (a sliding step counts its whole loss here)
 };
 
 /// Mindlin no-slip spring with damping and Coulomb limit; history: d_t (3 doubles, m).
@@ -135,6 +143,7 @@ struct MindlinFriction {
   static TangentialResult evaluate(const PairConstants& p, const Kinematics& k, double f_n,
                                    double dt, double* history) {
     Eigen::Map<Vec3> d_t(history);
+    const double s_t = 8.0 * p.g_star * k.sqrt_rd;  // (6)
     // Rotate into the current tangent plane, keeping the magnitude.
     const double before2 = d_t.squaredNorm();
     d_t -= d_t.dot(k.n) * k.n;
@@ -143,9 +152,13 @@ struct MindlinFriction {
     d_t *= after2 > 0.0 ? std::sqrt(before2 / after2) : 0.0;
     d_t += k.v_t * dt;
 
-    const double s_t = 8.0 * p.g_star * k.sqrt_rd;  // (6)
-    Vec3 f_t = -s_t * d_t;                          // (5)
-    if constexpr (Damping::active) f_t -= Damping::gamma(p, s_t, k.m_star) * k.v_t;  // (7)
+    Vec3 f_t = -s_t * d_t;  // (5)
+    double damping_power = 0.0;
+    if constexpr (Damping::active) {
+      const double gamma_t = Damping::gamma(p, s_t, k.m_star);
+      f_t -= gamma_t * k.v_t;  // (7)
+      damping_power = gamma_t * k.v_t.squaredNorm();
+    }
 
     const double limit = p.friction * std::abs(f_n);  // (8)
     const double f2 = f_t.squaredNorm();
@@ -153,8 +166,19 @@ struct MindlinFriction {
     if (sliding) {
       f_t *= limit / std::sqrt(f2);  // f2 > limit^2 >= 0, so f2 > 0
       d_t = -f_t / s_t;              // s_t > 0 whenever d_n > 0
+      damping_power = 0.0;
     }
-    return TangentialResult{f_t, sliding};
+    // Energy balance of the tangential spring over the step (spring energy S_t |d_t|^2 / 2,
+    // both ends at the current S_t): work in = -F_t . v_t dt = change of spring energy + loss.
+    const double work_in = -f_t.dot(k.v_t) * dt;
+    const double spring_change = 0.5 * s_t * (d_t.squaredNorm() - before2);
+    const double friction_loss = work_in - spring_change - damping_power * dt;
+    return TangentialResult{f_t, sliding, damping_power, friction_loss};
+  }
+  /// Energy held by the tangential spring, S_t |d_t|^2 / 2, J (S_t at the current overlap).
+  static double energy(const PairConstants& p, double sqrt_rd, const double* history) {
+    const double s_t = 8.0 * p.g_star * sqrt_rd;  // (6)
+    return 0.5 * s_t * Eigen::Map<const Vec3>(history).squaredNorm();
   }
 };
 
@@ -178,10 +202,14 @@ enum class NormalClamp {
 
 /// The force on i of one contact.
 struct ContactForce {
-  Vec3 force;       // F_n n + F_t, N
-  Vec3 tangential;  // F_t, N (zero without friction)
-  double normal;    // F_n, N (after the optional clamp)
-  bool sliding;     // the Coulomb limit was reached this step
+  Vec3 force;            // F_n n + F_t, N
+  Vec3 tangential;       // F_t, N (zero without friction)
+  double normal;         // F_n, N (after the optional clamp)
+  bool sliding;          // the Coulomb limit was reached this step
+  double damping_power;  // power the dashpots take out of the motion, W (>= 0): normal
+                         // (F_ne - F_n) v_n, which is gamma_n v_n^2 unclamped, plus the
+                         // tangential gamma_t |v_t|^2 while sticking
+  double friction_loss;  // J this step, see TangentialResult (0 without friction)
 };
 
 /// A contact law composed of parts. history_size doubles per contact hold the state of the
@@ -209,18 +237,30 @@ struct ContactLaw {
     if constexpr (Damping::active) f_n -= Damping::gamma(p, elastic.stiffness, k.m_star) * k.v_n;
     if constexpr (Clamp == NormalClamp::nonnegative) f_n = std::max(f_n, 0.0);
 
-    ContactForce c{f_n * k.n, Vec3::Zero(), f_n, false};
+    ContactForce c{f_n * k.n, Vec3::Zero(), f_n, false, (elastic.force - f_n) * k.v_n, 0.0};
     if constexpr (Tangential::active) {
       const TangentialResult t =
           Tangential::template evaluate<Damping>(p, k, f_n, dt, history + tangential_offset);
       c.force += t.force;
       c.tangential = t.force;
       c.sliding = t.sliding;
+      c.damping_power += t.damping_power;
+      c.friction_loss = t.friction_loss;
     } else {
       (void)dt;
       (void)history;
     }
     return c;
+  }
+
+  /// Elastic energy stored in a contact of overlap d_n > 0 and its history, J.
+  static double stored_energy(const PairConstants& p, double d_n, double r_star,
+                              const double* history) {
+    const double sqrt_rd = std::sqrt(r_star * d_n);
+    double u = Normal::energy(p, sqrt_rd, d_n);
+    if constexpr (Tangential::active) u += Tangential::energy(p, sqrt_rd, history + tangential_offset);
+    (void)history;
+    return u;
   }
 
   /// Clears the history of a contact that has ended.
@@ -233,6 +273,8 @@ struct ContactLaw {
 using HertzMindlin = ContactLaw<HertzElastic, ViscousDamping, MindlinFriction>;
 /// The same without friction (mu = 0 for every pair): no tangential history or torque.
 using HertzMindlinFrictionless = ContactLaw<HertzElastic, ViscousDamping, NoFriction>;
+/// Elastic and frictionless (every restitution 1, every friction 0): no damping, no history.
+using HertzElasticFrictionless = ContactLaw<HertzElastic, NoDamping, NoFriction>;
 /// Clamped variants.
 using HertzMindlinClamped =
     ContactLaw<HertzElastic, ViscousDamping, MindlinFriction, NoRolling, NormalClamp::nonnegative>;
@@ -263,18 +305,20 @@ struct PairForce {
   double normal;    // F_n, N
   Vec3 tangential;  // F_t on i, N
   bool sliding;
+  double damping_power;  // W, see ContactForce
+  double friction_loss;  // J this step, see ContactForce
 };
 
-namespace detail {
-
+/// One touching contact (d_n > 0) given its geometry: normal n (from j to i), overlap, R*, m*,
+/// the contact-point velocity of i relative to j and the radii (r_j = 0 for a wall).
 template <class Law>
-inline PairForce finish(const PairConstants& p, const Vec3& n, double d_n, double r_star,
-                        double m_star, const Vec3& v_rel, double r_i, double r_j, double dt,
-                        double* history) {
+inline PairForce pair_force(const PairConstants& p, const Vec3& n, double d_n, double r_star,
+                            double m_star, const Vec3& v_rel, double r_i, double r_j, double dt,
+                            double* history) {
   const Kinematics k = make_kinematics(n, d_n, r_star, m_star, v_rel);
   const ContactForce c = Law::evaluate(p, k, dt, history);
-  PairForce out{true, d_n, n, c.force, Vec3::Zero(), Vec3::Zero(), c.normal, c.tangential,
-                c.sliding};
+  PairForce out{true,     d_n,          n,         c.force,         Vec3::Zero(), Vec3::Zero(),
+                c.normal, c.tangential, c.sliding, c.damping_power, c.friction_loss};
   if constexpr (Law::has_friction) {
     const Vec3 nxf = n.cross(c.tangential);
     out.torque_i = -r_i * nxf;  // (-r_i n) x F_t
@@ -283,9 +327,11 @@ inline PairForce finish(const PairConstants& p, const Vec3& n, double d_n, doubl
   return out;
 }
 
+namespace detail {
+
 inline PairForce apart(const Vec3& n, double d_n) {
-  return PairForce{false,          d_n, n, Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), 0.0,
-                   Vec3::Zero(), false};
+  return PairForce{false, d_n, n, Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), 0.0,
+                   Vec3::Zero(), false, 0.0, 0.0};
 }
 
 }  // namespace detail
@@ -305,7 +351,7 @@ inline PairForce sphere_sphere(const PairConstants& p, const SphereState& i, con
   }
   const Vec3 n = d / dist;
   const Vec3 v_rel = i.v + i.w.cross(-i.radius * n) - (j.v + j.w.cross(j.radius * n));
-  return detail::finish<Law>(p, n, d_n, materials::reduced(i.radius, j.radius),
+  return pair_force<Law>(p, n, d_n, materials::reduced(i.radius, j.radius),
                              materials::reduced(i.mass, j.mass), v_rel, i.radius, j.radius, dt,
                              history);
 }
@@ -322,7 +368,7 @@ inline PairForce sphere_wall(const PairConstants& p, const SphereState& i, const
     return detail::apart(n, d_n);
   }
   const Vec3 v_rel = i.v + i.w.cross(-i.radius * n) - wall_velocity;
-  PairForce out = detail::finish<Law>(p, n, d_n, i.radius, i.mass, v_rel, i.radius, 0.0, dt,
+  PairForce out = pair_force<Law>(p, n, d_n, i.radius, i.mass, v_rel, i.radius, 0.0, dt,
                                       history);
   out.torque_j = Vec3::Zero();
   return out;

@@ -99,6 +99,28 @@ class VerletList {
     ++builds_;
   }
 
+  /// Puts back a list saved from start(), partner(), history() and builds() (a checkpoint), so
+  /// that a continued run sees the very same list. Throws std::invalid_argument when the pieces
+  /// do not fit together for n spheres.
+  void restore(std::size_t n, std::vector<std::uint32_t> start, std::vector<std::uint32_t> partner,
+               std::vector<double> history, long builds) {
+    const bool fits = start.size() == n + 1 && start.front() == 0 &&
+                      start.back() == partner.size() &&
+                      std::is_sorted(start.begin(), start.end()) &&
+                      history.size() == partner.size() * history_size_ &&
+                      std::all_of(partner.begin(), partner.end(),
+                                  [n](std::uint32_t p) { return p < n; });
+    if (!fits) {
+      throw std::invalid_argument("the saved neighbour list does not fit " + std::to_string(n) +
+                                  " particles with " + std::to_string(history_size_) +
+                                  " history values per pair");
+    }
+    start_ = std::move(start);
+    partner_ = std::move(partner);
+    history_ = std::move(history);
+    builds_ = builds;
+  }
+
   std::size_t pairs() const { return partner_.size(); }
   const std::vector<std::uint32_t>& start() const { return start_; }
   const std::vector<std::uint32_t>& partner() const { return partner_; }

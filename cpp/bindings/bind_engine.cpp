@@ -1,0 +1,197 @@
+// pybind11 glue for the DEM engine (millscope::engine). The GIL is released while it steps.
+#include <pybind11/stl.h>
+
+#include <cstdint>
+
+#include "millscope/engine.hpp"
+#include "numpy_view.hpp"
+
+namespace millscope::bindings {
+
+namespace {
+
+namespace en = millscope::engine;
+
+// An (n, 3) float64 array read in place.
+const double* data_n3(const InArray& a, std::size_t n, const char* name) {
+  if (a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != n || a.shape(1) != 3) {
+    throw std::invalid_argument(std::string(name) + " must have shape (" + std::to_string(n) +
+                                ", 3)");
+  }
+  return a.data();
+}
+
+template <class T>
+py::array_t<T> as_n3(std::vector<T>&& v) {
+  const auto rows = static_cast<py::ssize_t>(v.size() / 3);
+  auto flat = to_numpy(std::move(v));
+  return flat.reshape({rows, static_cast<py::ssize_t>(3)});
+}
+
+template <class T>
+std::vector<T> vector_of(const py::dict& d, const char* key) {
+  if (!d.contains(key)) throw std::invalid_argument(std::string("the snapshot has no '") + key + "'");
+  auto a = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(d[key]);
+  if (!a) throw std::invalid_argument(std::string("the snapshot's '") + key + "' is not an array");
+  return std::vector<T>(a.data(), a.data() + a.size());
+}
+
+template <class T>
+T scalar_of(const py::dict& d, const char* key) {
+  if (!d.contains(key)) throw std::invalid_argument(std::string("the snapshot has no '") + key + "'");
+  return py::cast<T>(d[key]);
+}
+
+py::dict torque_dict(const en::Torque& t) {
+  py::dict d;
+  d["total"] = t.total;
+  d["shell"] = t.shell;
+  d["lifters"] = t.lifters;
+  d["ends"] = t.ends;
+  return d;
+}
+
+}  // namespace
+
+void register_engine(py::module_& m) {
+  using py::arg;
+  using IntArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
+
+  py::class_<en::Engine>(m, "Engine", "The DEM engine: state, step loop, torque (engine.hpp).")
+      .def(py::init([](std::vector<materials::Material> materials, const InArray& restitution,
+                       const InArray& friction, int drum_material, const drum::Geometry& geometry,
+                       const InArray& radius, const IntArray& material, double dt, double gravity,
+                       double skin, bool clamp_normal, int threads) {
+             en::Config c;
+             c.materials = std::move(materials);
+             c.restitution.assign(restitution.data(), restitution.data() + restitution.size());
+             c.friction.assign(friction.data(), friction.data() + friction.size());
+             c.drum_material = drum_material;
+             c.geometry = geometry;
+             const double* r = data_1d(radius, "radius");
+             c.radius.assign(r, r + radius.size());
+             if (material.ndim() != 1) throw std::invalid_argument("material must be 1-D");
+             c.material.assign(material.data(), material.data() + material.size());
+             c.dt = dt;
+             c.gravity = gravity;
+             c.skin = skin;
+             c.clamp_normal = clamp_normal;
+             c.threads = threads;
+             return en::Engine(std::move(c));
+           }),
+           arg("materials"), arg("restitution"), arg("friction"), arg("drum_material"),
+           arg("geometry"), arg("radius"), arg("material"), arg("dt"), arg("gravity") = 9.81,
+           arg("skin") = 0.0, arg("clamp_normal") = false, arg("threads") = 1)
+      .def_property_readonly("size", &en::Engine::size)
+      .def_property_readonly("dt", &en::Engine::dt)
+      .def_property_readonly("threads", &en::Engine::threads)
+      .def_property_readonly("variant", [](const en::Engine& e) { return e.variant().describe(); })
+      .def_property_readonly("skin", &en::Engine::skin)
+      .def_property_readonly("list_builds", &en::Engine::list_builds)
+      .def_property_readonly("list_pairs", &en::Engine::list_pairs)
+      .def_property_readonly("bytes_per_particle", &en::Engine::bytes_per_particle)
+      .def_property_readonly("step_count", &en::Engine::step_count)
+      .def_property_readonly("time", &en::Engine::time)
+      .def_property_readonly("drum_angle", &en::Engine::drum_angle)
+      .def_property_readonly("omega", &en::Engine::omega)
+      .def_property_readonly("rotation_start_step", &en::Engine::rotation_start_step)
+      .def("start_rotation", &en::Engine::start_rotation, arg("omega"))
+      .def_property(
+          "positions", [](const en::Engine& e) { return as_n3(e.positions()); },
+          [](en::Engine& e, const InArray& a) { e.set_positions(data_n3(a, e.size(), "positions")); })
+      .def_property(
+          "velocities", [](const en::Engine& e) { return as_n3(e.velocities()); },
+          [](en::Engine& e, const InArray& a) { e.set_velocities(data_n3(a, e.size(), "velocities")); })
+      .def_property(
+          "spins", [](const en::Engine& e) { return as_n3(e.spins()); },
+          [](en::Engine& e, const InArray& a) { e.set_spins(data_n3(a, e.size(), "spins")); })
+      .def_property_readonly("radius", [](const en::Engine& e) { return to_numpy(std::vector<double>(e.radius())); })
+      .def_property_readonly("mass", [](const en::Engine& e) { return to_numpy(std::vector<double>(e.mass())); })
+      .def("advance", &en::Engine::advance, arg("steps"), py::call_guard<py::gil_scoped_release>())
+      .def(
+          "advance_sampled",
+          [](en::Engine& e, double sample_dt, bool mean, long count) {
+            std::vector<double> rows;
+            {
+              py::gil_scoped_release release;
+              rows = e.advance_sampled(sample_dt, mean, count);
+            }
+            const auto n = static_cast<py::ssize_t>(rows.size() / 5);
+            return to_numpy(std::move(rows)).reshape({n, static_cast<py::ssize_t>(5)});
+          },
+          arg("sample_dt"), arg("mean"), arg("count"),
+          "Steps until `count` torque samples are taken; rows (t, total, shell, lifters, ends).")
+      .def("torque", [](const en::Engine& e) { return torque_dict(e.torque()); })
+      .def("ledger",
+           [](const en::Engine& e) {
+             py::dict d;
+             d["drive_work"] = e.ledger().drive_work;
+             d["damping_loss"] = e.ledger().damping_loss;
+             d["friction_loss"] = e.ledger().friction_loss;
+             return d;
+           })
+      .def("kinetic_energy", &en::Engine::kinetic_energy)
+      .def("potential_energy", &en::Engine::potential_energy)
+      .def("elastic_energy", &en::Engine::elastic_energy)
+      .def("max_overlap_ratio", &en::Engine::max_overlap_ratio)
+      .def("snapshot",
+           [](const en::Engine& e) {
+             en::Engine::Snapshot s = e.snapshot();
+             py::dict d;
+             d["x"] = to_numpy(std::move(s.x));
+             d["v"] = to_numpy(std::move(s.v));
+             d["w"] = to_numpy(std::move(s.w));
+             d["f"] = to_numpy(std::move(s.f));
+             d["t"] = to_numpy(std::move(s.t));
+             d["x_ref"] = to_numpy(std::move(s.x_ref));
+             d["wall_history"] = to_numpy(std::move(s.wall_history));
+             d["wall_lifter"] = to_numpy(std::move(s.wall_lifter));
+             d["list_start"] = to_numpy(std::move(s.list_start));
+             d["list_partner"] = to_numpy(std::move(s.list_partner));
+             d["list_history"] = to_numpy(std::move(s.list_history));
+             d["step"] = s.step;
+             d["rotation_start"] = s.rotation_start;
+             d["last_sample_offset"] = s.last_sample_offset;
+             d["list_builds"] = s.list_builds;
+             d["theta"] = s.theta;
+             d["omega"] = s.omega;
+             d["forces_valid"] = s.forces_valid;
+             d["torque"] = py::make_tuple(s.torque.total, s.torque.shell, s.torque.lifters, s.torque.ends);
+             d["ledger"] = py::make_tuple(s.ledger.drive_work, s.ledger.damping_loss, s.ledger.friction_loss);
+             return d;
+           },
+           "Every array and scalar needed to continue the run bit for bit (a checkpoint).")
+      .def(
+          "restore",
+          [](en::Engine& e, const py::dict& d) {
+            en::Engine::Snapshot s;
+            s.x = vector_of<double>(d, "x");
+            s.v = vector_of<double>(d, "v");
+            s.w = vector_of<double>(d, "w");
+            s.f = vector_of<double>(d, "f");
+            s.t = vector_of<double>(d, "t");
+            s.x_ref = vector_of<double>(d, "x_ref");
+            s.wall_history = vector_of<double>(d, "wall_history");
+            s.wall_lifter = vector_of<std::int32_t>(d, "wall_lifter");
+            s.list_start = vector_of<std::uint32_t>(d, "list_start");
+            s.list_partner = vector_of<std::uint32_t>(d, "list_partner");
+            s.list_history = vector_of<double>(d, "list_history");
+            s.step = scalar_of<long>(d, "step");
+            s.rotation_start = scalar_of<long>(d, "rotation_start");
+            s.last_sample_offset = scalar_of<long>(d, "last_sample_offset");
+            s.list_builds = scalar_of<long>(d, "list_builds");
+            s.theta = scalar_of<double>(d, "theta");
+            s.omega = scalar_of<double>(d, "omega");
+            s.forces_valid = scalar_of<bool>(d, "forces_valid");
+            const auto t = scalar_of<std::vector<double>>(d, "torque");
+            const auto l = scalar_of<std::vector<double>>(d, "ledger");
+            if (t.size() != 4 || l.size() != 3)
+              throw std::invalid_argument("the snapshot's torque or ledger has the wrong length");
+            s.torque = en::Torque{t[0], t[1], t[2], t[3]};
+            s.ledger = en::Ledger{l[0], l[1], l[2]};
+            e.restore(s);
+          },
+          arg("snapshot"));
+}
+
+}  // namespace millscope::bindings

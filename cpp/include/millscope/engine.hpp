@@ -1,0 +1,211 @@
+// The DEM engine: state of the charge in structure-of-arrays storage, the step loop (velocity
+// Verlet), contact forces with the charge and the drum, and the drive torque (DESIGN.md
+// sections 2 and 7; paper section 3.1).
+//
+// One step, from t to t + dt (kick-drift-kick velocity Verlet, for translation and rotation):
+//   1. v += F/m dt/2, w += T/I dt/2          (half-step velocities v(t + dt/2))
+//   2. x += v dt                              (positions at t + dt); drum angle += omega dt
+//   3. the neighbour list is rebuilt when a particle has moved more than skin/2 since the last
+//      build
+//   4. forces and torques at t + dt from the positions at t + dt and the half-step velocities
+//      (the damping and the tangential history use v(t + dt/2), as LAMMPS and LIGGGHTS do)
+//   5. v += F/m dt/2, w += T/I dt/2          (full-step velocities v(t + dt))
+// The drive torque of step 4 is the step's torque: the sum over particle-drum contacts of
+// ((x_c - axis) x F_drum_on_particle) . z, split into shell, lifters and end walls.
+//
+// What a scene does not use costs nothing: the contact law (friction or none, damping or none,
+// clamped or not), one material or a pair table, lifters or none, end walls or periodic ends
+// are template parameters of the step kernel, chosen once when the engine is made
+// (engine_kernels.hpp, instantiated in src/engine_*.cpp).
+//
+// Threads: one OpenMP team runs a whole call of advance(); pair forces go to per-thread buffers
+// (half neighbour list, no atomics) that are summed in a fixed order, so a run is reproducible
+// bit for bit at a given thread count.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "millscope/drum.hpp"
+#include "millscope/materials.hpp"
+#include "millscope/neighbors.hpp"
+
+namespace millscope::engine {
+
+/// Everything the engine needs to know about a scene. Validated by Engine's constructor.
+struct Config {
+  std::vector<materials::Material> materials;
+  std::vector<double> restitution;  // n x n, row-major, symmetric
+  std::vector<double> friction;     // n x n, row-major, symmetric
+  int drum_material = 0;            // index into materials
+  drum::Geometry geometry{};
+  std::vector<double> radius;       // per particle, m
+  std::vector<int> material;        // per particle, index into materials
+  double dt = 0.0;                  // s
+  double gravity = 9.81;            // m/s^2, acting along -y
+  double skin = 0.0;                // m; 0: a default of 0.1 x the smallest radius... see Engine
+  bool clamp_normal = false;        // F_n = max(F_n, 0)
+  int threads = 1;
+};
+
+/// Drive torque about the drum axis, N m (positive: the drive pushes the drum forward).
+struct Torque {
+  double total = 0.0;
+  double shell = 0.0;
+  double lifters = 0.0;
+  double ends = 0.0;
+};
+
+/// Running totals of work and losses since the engine was made, J. With the kinetic, potential
+/// and elastic energies they close the energy balance:
+///   drive_work = change of (kinetic + potential + elastic) + damping_loss + friction_loss.
+struct Ledger {
+  double drive_work = 0.0;     // integral of omega x torque dt: the work the drive did
+  double damping_loss = 0.0;   // integral of the dashpots' power (normal; tangential while
+                               // sticking)
+  double friction_loss = 0.0;  // energy lost to Coulomb sliding (see contact::TangentialResult)
+};
+
+/// Which specialised step kernel a scene needs (DESIGN.md section 7).
+struct Variant {
+  enum class Law : int { hertz_mindlin = 0, frictionless = 1, elastic = 2, clamped = 3 };
+  Law law = Law::hertz_mindlin;
+  bool one_material = false;
+  bool lifters = false;
+  bool end_walls = true;
+  std::string describe() const;
+};
+
+/// Wall contact history per particle: shell, low end, high end, and two lifter slots.
+inline constexpr std::size_t wall_slots = 5;
+
+class Engine;
+
+/// Called after every step by the step loop (from one thread); returns true to stop.
+class StepObserver {
+ public:
+  virtual ~StepObserver() = default;
+  virtual bool after_step(const Engine& engine) = 0;
+};
+
+using StepKernel = void (*)(Engine&, long steps, StepObserver* observer);
+
+/// The step kernels of each contact law (src/engine_law_*.cpp), for the scene's shape.
+namespace kernels {
+StepKernel hertz_mindlin(bool one_material, bool lifters, bool end_walls);
+StepKernel frictionless(bool one_material, bool lifters, bool end_walls);
+StepKernel elastic(bool one_material, bool lifters, bool end_walls);
+StepKernel clamped(bool one_material, bool lifters, bool end_walls);
+}  // namespace kernels
+
+/// The engine's state and its step loop.
+class Engine {
+ public:
+  explicit Engine(Config config);
+
+  // ---- sizes and settings
+  std::size_t size() const { return n_; }
+  double dt() const { return dt_; }
+  int threads() const { return threads_; }
+  const Variant& variant() const { return variant_; }
+  const drum::Geometry& geometry() const { return config_.geometry; }
+  double skin() const { return list_.skin(); }
+  long list_builds() const { return list_.builds(); }
+  std::size_t list_pairs() const { return list_.pairs(); }
+  /// Bytes held per particle: state, wall history, neighbour list and its history, buffers.
+  double bytes_per_particle() const;
+
+  // ---- time and the drum
+  long step_count() const { return step_; }
+  double time() const { return static_cast<double>(step_) * dt_; }
+  double drum_angle() const { return theta_; }
+  double omega() const { return omega_; }
+  /// Sets the drum's angular velocity about +z, rad/s, and marks the start of rotation: sample
+  /// times count from here.
+  void start_rotation(double omega);
+  long rotation_start_step() const { return rotation_start_; }
+
+  // ---- state in and out (n x 3, row-major)
+  void set_positions(const double* xyz);
+  void set_velocities(const double* v);
+  void set_spins(const double* w);
+  std::vector<double> positions() const;
+  std::vector<double> velocities() const;
+  std::vector<double> spins() const;
+  const std::vector<double>& radius() const { return r_; }
+  const std::vector<double>& mass() const { return m_; }
+
+  // ---- running
+  /// Advances `steps` steps.
+  void advance(long steps);
+  /// Advances until `count` more torque samples were taken at interval `sample_dt` (s) from the
+  /// start of rotation. Sample k belongs to time k sample_dt: "instant" takes the torque of the
+  /// step nearest that time, "mean" the mean over the steps ending in (t_k, t_k + sample_dt].
+  /// Returns count x 5 values: time (s since rotation start), total, shell, lifters, end walls.
+  std::vector<double> advance_sampled(double sample_dt, bool mean, long count);
+
+  // ---- observables
+  Torque torque() const { return torque_; }
+  const Ledger& ledger() const { return ledger_; }
+  double kinetic_energy() const;    // translational + rotational, J
+  double potential_energy() const;  // m g y summed, J (y = 0 on the axis)
+  double elastic_energy() const;    // stored in all contacts, J
+  double max_overlap_ratio() const;  // largest overlap / radius of the smaller body
+
+  // ---- checkpoint: every array and scalar needed to continue bit for bit
+  struct Snapshot {
+    std::vector<double> x, v, w, f, t;  // n x 3 each
+    std::vector<double> x_ref;          // n x 3, positions at the last list build
+    std::vector<double> wall_history;   // n x wall_slots x 3
+    std::vector<std::int32_t> wall_lifter;  // n x 2
+    std::vector<std::uint32_t> list_start, list_partner;
+    std::vector<double> list_history;
+    long step = 0, rotation_start = -1, last_sample_offset = -1, list_builds = 0;
+    double theta = 0.0, omega = 0.0;
+    bool forces_valid = false;
+    Torque torque;
+    Ledger ledger;
+  };
+  Snapshot snapshot() const;
+  void restore(const Snapshot& s);
+
+  // ---- used by the step kernels (engine_kernels.hpp)
+  struct Access;
+
+ private:
+  friend struct Access;
+  void check_state(const char* where) const;
+
+  Config config_;
+  std::size_t n_;
+  double dt_;
+  int threads_;
+  Variant variant_;
+  StepKernel kernel_;
+  materials::PairTable pairs_;
+  neighbors::VerletList list_;
+
+  // structure of arrays
+  std::vector<double> x_, y_, z_, vx_, vy_, vz_, wx_, wy_, wz_;
+  std::vector<double> fx_, fy_, fz_, tx_, ty_, tz_;
+  std::vector<double> r_, m_, inv_m_, inv_i_;
+  std::vector<int> mat_;
+  std::vector<double> x_ref_, y_ref_, z_ref_;
+  std::vector<double> wall_history_;          // n x wall_slots x 3 (friction only)
+  std::vector<std::int32_t> wall_lifter_;     // n x 2: lifter index of each lifter slot, -1 free
+  std::vector<std::vector<double>> buffers_;  // per thread: 6 x n force and torque sums
+  std::vector<std::size_t> row_split_;        // threads + 1 row boundaries balancing pairs
+
+  long step_ = 0;
+  long rotation_start_ = -1;
+  long last_sample_offset_ = -1;
+  double theta_ = 0.0;
+  double omega_ = 0.0;
+  bool forces_valid_ = false;
+  Torque torque_;
+  Ledger ledger_;
+};
+
+}  // namespace millscope::engine

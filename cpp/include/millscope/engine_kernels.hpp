@@ -1,0 +1,372 @@
+// The step kernel of the engine, specialised per scene (engine.hpp explains the step).
+// Included only by the src/engine_law_*.cpp files that instantiate it; never by bindings.
+#pragma once
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "millscope/contact.hpp"
+#include "millscope/drum.hpp"
+#include "millscope/engine.hpp"
+
+namespace millscope::engine {
+
+/// Per-thread sums of one step, padded to a cache line so threads do not share one.
+struct alignas(64) StepPartial {
+  double shell = 0.0, lifters = 0.0, ends = 0.0;  // drive torque, N m
+  double damping_power = 0.0;                     // W
+  double friction_loss = 0.0;                     // J
+  double displacement2 = 0.0;                     // largest squared move since the list build
+  std::size_t bad = std::numeric_limits<std::size_t>::max();  // first particle in a bad state
+};
+
+struct Engine::Access {
+  template <class Law, bool OneMaterial, bool Lifters, bool EndWalls>
+  static void run(Engine& e, long steps, StepObserver* observer);
+
+  static void rebuild(Engine& e);
+  static void split_rows(Engine& e);
+  static std::string describe_bad(const Engine& e, std::size_t i);
+};
+
+template <class Law, bool OneMaterial, bool Lifters, bool EndWalls>
+void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
+  using contact::Vec3;
+  constexpr std::size_t hs = Law::history_size;  // per pair-contact history, doubles
+  constexpr bool friction = Law::has_friction;
+  static_assert(!friction || hs == 3, "the wall history slots hold 3 doubles per contact");
+
+  const std::size_t n = e.n_;
+  const int team = e.threads_;
+  const double dt = e.dt_;
+  const double half_dt = 0.5 * dt;
+  const double gravity = e.config_.gravity;
+  const drum::Geometry& geom = e.config_.geometry;
+  const double period = geom.length;  // periodic ends: the drum length is the period
+  const std::size_t drum_mat = static_cast<std::size_t>(e.config_.drum_material);
+  const materials::PairConstants pc_one = e.pairs_(0, 0);
+  const materials::PairTable& table = e.pairs_;
+  const double skin_half2 = 0.25 * e.list_.skin() * e.list_.skin();
+
+  double* const x = e.x_.data();
+  double* const y = e.y_.data();
+  double* const z = e.z_.data();
+  double* const vx = e.vx_.data();
+  double* const vy = e.vy_.data();
+  double* const vz = e.vz_.data();
+  double* const wx = e.wx_.data();
+  double* const wy = e.wy_.data();
+  double* const wz = e.wz_.data();
+  double* const fx = e.fx_.data();
+  double* const fy = e.fy_.data();
+  double* const fz = e.fz_.data();
+  double* const tx = e.tx_.data();
+  double* const ty = e.ty_.data();
+  double* const tz = e.tz_.data();
+  const double* const r = e.r_.data();
+  const double* const m = e.m_.data();
+  const double* const inv_m = e.inv_m_.data();
+  const double* const inv_i = e.inv_i_.data();
+  const int* const mat = e.mat_.data();
+
+  std::vector<StepPartial> partial(static_cast<std::size_t>(team));
+  bool stop = steps <= 0 && e.forces_valid_;
+  std::string error;
+
+  if (e.list_.builds() == 0) rebuild(e);
+
+  // Pair forces of the rows [row_split[t], row_split[t+1]) into thread t's buffer.
+  auto pair_pass = [&](int t, double history_dt) {
+    double* const buf = e.buffers_[static_cast<std::size_t>(t)].data();
+    std::fill(buf, buf + 6 * n, 0.0);
+    double* const bfx = buf;
+    double* const bfy = buf + n;
+    double* const bfz = buf + 2 * n;
+    double* const btx = buf + 3 * n;
+    double* const bty = buf + 4 * n;
+    double* const btz = buf + 5 * n;
+    StepPartial& part = partial[static_cast<std::size_t>(t)];
+    const std::uint32_t* const start = e.list_.start().data();
+    const std::uint32_t* const partner = e.list_.partner().data();
+    double* const history = e.list_.history().data();
+    const std::size_t row_end = e.row_split_[static_cast<std::size_t>(t) + 1];
+    for (std::size_t i = e.row_split_[static_cast<std::size_t>(t)]; i < row_end; ++i) {
+      for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
+        const std::size_t j = partner[s];
+        double* const hist = hs > 0 ? history + static_cast<std::size_t>(s) * hs : nullptr;
+        const double dx = x[i] - x[j], dy = y[i] - y[j];
+        double dz = z[i] - z[j];
+        if constexpr (!EndWalls) dz -= period * std::nearbyint(dz / period);
+        const double r_sum = r[i] + r[j];
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        if (!(d2 < r_sum * r_sum)) {
+          if constexpr (hs > 0) Law::reset(hist);
+          continue;
+        }
+        const double dist = std::sqrt(d2);
+        const Vec3 nrm(dx / dist, dy / dist, dz / dist);  // from j to i
+        const Vec3 vi(vx[i], vy[i], vz[i]), vj(vx[j], vy[j], vz[j]);
+        Vec3 v_rel = vi - vj;
+        if constexpr (friction) {
+          const Vec3 wi(wx[i], wy[i], wz[i]), wj(wx[j], wy[j], wz[j]);
+          v_rel += wi.cross(-r[i] * nrm) - wj.cross(r[j] * nrm);
+        }
+        const materials::PairConstants& pc =
+            OneMaterial ? pc_one
+                        : table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(mat[j]));
+        const double r_star = r[i] * r[j] / r_sum;
+        const double m_star = m[i] * m[j] / (m[i] + m[j]);
+        const contact::PairForce pf = contact::pair_force<Law>(
+            pc, nrm, r_sum - dist, r_star, m_star, v_rel, r[i], r[j], history_dt, hist);
+        bfx[i] += pf.force_i.x();
+        bfy[i] += pf.force_i.y();
+        bfz[i] += pf.force_i.z();
+        bfx[j] -= pf.force_i.x();
+        bfy[j] -= pf.force_i.y();
+        bfz[j] -= pf.force_i.z();
+        if constexpr (friction) {
+          btx[i] += pf.torque_i.x();
+          bty[i] += pf.torque_i.y();
+          btz[i] += pf.torque_i.z();
+          btx[j] += pf.torque_j.x();
+          bty[j] += pf.torque_j.y();
+          btz[j] += pf.torque_j.z();
+          part.friction_loss += pf.friction_loss;
+        }
+        part.damping_power += pf.damping_power;
+      }
+    }
+  };
+
+  // Per particle: sum the thread buffers, add the drum's contacts and gravity, then (kick)
+  // the second half kick. Particles [lo, hi) belong to thread t.
+  auto particle_pass = [&](int t, double history_dt, bool kick) {
+    StepPartial& part = partial[static_cast<std::size_t>(t)];
+    const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
+    const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
+    const double omega = e.omega_, theta = e.theta_;
+    for (std::size_t i = lo; i < hi; ++i) {
+      Vec3 f(0.0, -m[i] * gravity, 0.0), tq(0.0, 0.0, 0.0);
+      for (int b = 0; b < team; ++b) {
+        const double* const buf = e.buffers_[static_cast<std::size_t>(b)].data();
+        f += Vec3(buf[i], buf[n + i], buf[2 * n + i]);
+        if constexpr (friction) tq += Vec3(buf[3 * n + i], buf[4 * n + i], buf[5 * n + i]);
+      }
+      const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
+      const drum::WallContacts found = drum::find_contacts(geom, theta, xi, r[i]);
+      [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
+      [[maybe_unused]] std::int32_t* const lifter_of_slot = &e.wall_lifter_[2 * i];
+      [[maybe_unused]] double* const wall_hist =
+          friction ? &e.wall_history_[i * wall_slots * 3] : nullptr;
+      for (int c = 0; c < found.count; ++c) {
+        const drum::WallContact& wc = found.items[static_cast<std::size_t>(c)];
+        double* hist = nullptr;
+        if constexpr (friction) {
+          std::size_t slot = 0;
+          if (wc.part == drum::Part::lifter) {
+            if (lifter_of_slot[0] == wc.index) {
+              slot = 3;
+            } else if (lifter_of_slot[1] == wc.index) {
+              slot = 4;
+            } else {
+              // A new lifter contact takes a slot no current contact holds.
+              const bool slot3_held = [&] {
+                for (int o = 0; o < found.count; ++o) {
+                  const auto& other = found.items[static_cast<std::size_t>(o)];
+                  if (other.part == drum::Part::lifter && other.index == lifter_of_slot[0])
+                    return true;
+                }
+                return false;
+              }();
+              slot = slot3_held ? 4 : 3;
+              lifter_of_slot[slot - 3] = wc.index;
+              Law::reset(wall_hist + slot * 3);
+            }
+          } else {
+            slot = static_cast<std::size_t>(wc.part);  // shell 0, end_low 1, end_high 2
+          }
+          used |= 1u << slot;
+          hist = wall_hist + slot * 3;
+        }
+        const Vec3 v_wall = drum::surface_velocity(omega, wc.point);
+        Vec3 v_rel = vi - v_wall;
+        if constexpr (friction) v_rel += wi.cross(-r[i] * wc.normal);
+        const materials::PairConstants& pc =
+            OneMaterial ? pc_one : table(static_cast<std::size_t>(mat[i]), drum_mat);
+        const contact::PairForce pf = contact::pair_force<Law>(
+            pc, wc.normal, wc.overlap, r[i], m[i], v_rel, r[i], 0.0, history_dt, hist);
+        f += pf.force_i;
+        // Drive torque: ((x_c - axis) x F_drum_on_particle) . z (DESIGN.md section 2).
+        const double arm_torque =
+            wc.point.x() * pf.force_i.y() - wc.point.y() * pf.force_i.x();
+        if (wc.part == drum::Part::shell) {
+          part.shell += arm_torque;
+        } else if (wc.part == drum::Part::lifter) {
+          part.lifters += arm_torque;
+        } else {
+          part.ends += arm_torque;
+        }
+        part.damping_power += pf.damping_power;
+        if constexpr (friction) {
+          tq += pf.torque_i;
+          part.friction_loss += pf.friction_loss;
+        }
+      }
+      if constexpr (friction) {
+        // Contacts that ended: clear their history and free their lifter slot.
+        for (std::size_t slot = 0; slot < wall_slots; ++slot) {
+          if (used & (1u << slot)) continue;
+          if (slot >= 3) {
+            if (lifter_of_slot[slot - 3] < 0) continue;
+            lifter_of_slot[slot - 3] = -1;
+          }
+          Law::reset(wall_hist + slot * 3);
+        }
+      }
+      fx[i] = f.x();
+      fy[i] = f.y();
+      fz[i] = f.z();
+      tx[i] = tq.x();
+      ty[i] = tq.y();
+      tz[i] = tq.z();
+      if (kick) {
+        vx[i] += f.x() * inv_m[i] * half_dt;
+        vy[i] += f.y() * inv_m[i] * half_dt;
+        vz[i] += f.z() * inv_m[i] * half_dt;
+        if constexpr (friction) {
+          wx[i] += tq.x() * inv_i[i] * half_dt;
+          wy[i] += tq.y() * inv_i[i] * half_dt;
+          wz[i] += tq.z() * inv_i[i] * half_dt;
+        }
+      }
+      // Guard: nothing non-finite, no centre beyond the shell.
+      const double check = fx[i] + fy[i] + fz[i] + vx[i] + vy[i] + vz[i] + wx[i] + wy[i] + wz[i];
+      if (!std::isfinite(check) || x[i] * x[i] + y[i] * y[i] > geom.radius * geom.radius)
+        part.bad = std::min(part.bad, i);
+    }
+  };
+
+  // First half kick and drift for particles [lo, hi); tracks the largest move since the build.
+  auto kick_drift = [&](int t) {
+    StepPartial& part = partial[static_cast<std::size_t>(t)];
+    const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
+    const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
+    double move2 = 0.0;
+    for (std::size_t i = lo; i < hi; ++i) {
+      vx[i] += fx[i] * inv_m[i] * half_dt;
+      vy[i] += fy[i] * inv_m[i] * half_dt;
+      vz[i] += fz[i] * inv_m[i] * half_dt;
+      if constexpr (friction) {
+        wx[i] += tx[i] * inv_i[i] * half_dt;
+        wy[i] += ty[i] * inv_i[i] * half_dt;
+        wz[i] += tz[i] * inv_i[i] * half_dt;
+      }
+      x[i] += vx[i] * dt;
+      y[i] += vy[i] * dt;
+      z[i] += vz[i] * dt;
+      double dz = z[i] - e.z_ref_[i];
+      if constexpr (!EndWalls) {
+        z[i] -= period * std::floor(z[i] / period);
+        dz -= period * std::nearbyint(dz / period);
+      }
+      const double dx = x[i] - e.x_ref_[i], dy = y[i] - e.y_ref_[i];
+      move2 = std::max(move2, dx * dx + dy * dy + dz * dz);
+    }
+    part.displacement2 = move2;
+  };
+
+  auto reset_partials = [&] {
+    for (auto& p : partial) p = StepPartial{};
+  };
+
+  // After a pass pair: sum the per-thread partials in thread order (reproducible).
+  auto close_step = [&](double ledger_dt) {
+    Torque tq;
+    double damping = 0.0, friction_loss = 0.0;
+    std::size_t bad = std::numeric_limits<std::size_t>::max();
+    for (const auto& p : partial) {
+      tq.shell += p.shell;
+      tq.lifters += p.lifters;
+      tq.ends += p.ends;
+      damping += p.damping_power;
+      friction_loss += p.friction_loss;
+      bad = std::min(bad, p.bad);
+    }
+    tq.total = tq.shell + tq.lifters + tq.ends;
+    e.torque_ = tq;
+    e.ledger_.drive_work += e.omega_ * tq.total * ledger_dt;
+    e.ledger_.damping_loss += damping * ledger_dt;
+    if (ledger_dt > 0.0) e.ledger_.friction_loss += friction_loss;
+    if (bad != std::numeric_limits<std::size_t>::max()) {
+      error = describe_bad(e, bad);
+      return true;
+    }
+    return false;
+  };
+
+#pragma omp parallel num_threads(team)
+  {
+    const int t = omp_get_thread_num();
+    if (!e.forces_valid_) {
+      // The forces of the initial state; the tangential history does not advance.
+#pragma omp single
+      reset_partials();
+      pair_pass(t, 0.0);
+#pragma omp barrier
+      particle_pass(t, 0.0, false);
+#pragma omp barrier
+#pragma omp single
+      {
+        if (close_step(0.0)) stop = true;
+        e.forces_valid_ = true;
+      }
+    }
+    for (long s = 0; s < steps && !stop; ++s) {
+#pragma omp single
+      reset_partials();
+      kick_drift(t);
+#pragma omp barrier
+#pragma omp single
+      {
+        e.theta_ += e.omega_ * dt;
+        ++e.step_;
+        double move2 = 0.0;
+        for (const auto& p : partial) move2 = std::max(move2, p.displacement2);
+        if (move2 > skin_half2) rebuild(e);
+      }
+      pair_pass(t, dt);
+#pragma omp barrier
+      particle_pass(t, dt, true);
+#pragma omp barrier
+#pragma omp single
+      {
+        if (close_step(dt)) stop = true;
+        if (!stop && observer != nullptr && observer->after_step(e)) stop = true;
+      }
+    }
+  }
+  if (!error.empty()) throw std::runtime_error(error);
+}
+
+/// The kernel of a law for the scene's shape, chosen once per engine.
+template <class Law>
+StepKernel select_kernel(bool one_material, bool lifters, bool end_walls) {
+  using A = Engine::Access;
+  if (one_material) {
+    if (lifters) return end_walls ? &A::run<Law, true, true, true> : &A::run<Law, true, true, false>;
+    return end_walls ? &A::run<Law, true, false, true> : &A::run<Law, true, false, false>;
+  }
+  if (lifters) return end_walls ? &A::run<Law, false, true, true> : &A::run<Law, false, true, false>;
+  return end_walls ? &A::run<Law, false, false, true> : &A::run<Law, false, false, false>;
+}
+
+}  // namespace millscope::engine

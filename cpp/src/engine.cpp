@@ -1,0 +1,493 @@
+// The engine's set-up, state access, observables and checkpoints (engine.hpp). The step loop
+// itself is in engine_kernels.hpp.
+#include "millscope/engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "millscope/contact.hpp"
+#include "millscope/engine_kernels.hpp"
+#include "millscope/timestep.hpp"
+
+namespace millscope::engine {
+
+namespace {
+
+[[noreturn]] void invalid(const std::string& name, double value, const std::string& range) {
+  std::ostringstream msg;
+  msg << name << " = " << value << " is not valid; it must be " << range;
+  throw std::invalid_argument(msg.str());
+}
+
+/// Materials in use: the drum's and every particle's.
+std::set<int> used_materials(const Config& c) {
+  std::set<int> used(c.material.begin(), c.material.end());
+  used.insert(c.drum_material);
+  return used;
+}
+
+void validate(const Config& c) {
+  const auto n_mat = static_cast<int>(c.materials.size());
+  if (n_mat == 0) throw std::invalid_argument("materials is empty; at least one is needed");
+  if (c.drum_material < 0 || c.drum_material >= n_mat)
+    invalid("drum_material", c.drum_material, "an index in [0, " + std::to_string(n_mat) + ")");
+  c.geometry.validate();
+  if (c.radius.empty()) throw std::invalid_argument("the charge is empty; at least one particle is needed");
+  if (c.radius.size() != c.material.size()) {
+    throw std::invalid_argument("radius has " + std::to_string(c.radius.size()) +
+                                " entries but material has " + std::to_string(c.material.size()) +
+                                "; they must match (one per particle)");
+  }
+  for (std::size_t i = 0; i < c.radius.size(); ++i) {
+    const std::string at = "[" + std::to_string(i) + "]";
+    if (!(c.radius[i] > 0.0) || !std::isfinite(c.radius[i])) invalid("radius" + at, c.radius[i], "finite and > 0 m");
+    if (c.material[i] < 0 || c.material[i] >= n_mat)
+      invalid("material" + at, c.material[i], "an index in [0, " + std::to_string(n_mat) + ")");
+  }
+  if (!(c.gravity >= 0.0) || !std::isfinite(c.gravity)) invalid("gravity", c.gravity, "finite and >= 0 m/s^2");
+  if (!(c.skin >= 0.0) || !std::isfinite(c.skin)) invalid("skin", c.skin, "finite and >= 0 m (0: default)");
+  if (c.threads < 1) invalid("threads", c.threads, ">= 1");
+  // The time step against the smallest Rayleigh time of the charge (DESIGN.md section 2).
+  double t_min = HUGE_VAL;
+  for (std::size_t i = 0; i < c.radius.size(); ++i) {
+    const auto& mat = c.materials[static_cast<std::size_t>(c.material[i])];
+    t_min = std::min(t_min, timestep::rayleigh_time(c.radius[i], mat.density, mat.shear_modulus,
+                                                    mat.poisson));
+  }
+  timestep::require_stable_dt(c.dt, t_min);
+}
+
+Variant choose_variant(const Config& c, const materials::PairTable& table) {
+  const std::set<int> used = used_materials(c);
+  bool friction = false, damping = false;
+  for (int a : used) {
+    for (int b : used) {
+      const auto& p = table.at(static_cast<std::size_t>(a), static_cast<std::size_t>(b));
+      friction = friction || p.friction > 0.0;
+      damping = damping || p.restitution < 1.0;
+    }
+  }
+  Variant v;
+  if (c.clamp_normal) {
+    v.law = Variant::Law::clamped;
+  } else if (friction) {
+    v.law = Variant::Law::hertz_mindlin;
+  } else {
+    v.law = damping ? Variant::Law::frictionless : Variant::Law::elastic;
+  }
+  v.one_material = used.size() == 1;
+  v.lifters = c.geometry.lifters > 0;
+  v.end_walls = c.geometry.end_walls;
+  return v;
+}
+
+StepKernel kernel_of(const Variant& v) {
+  switch (v.law) {
+    case Variant::Law::hertz_mindlin:
+      return kernels::hertz_mindlin(v.one_material, v.lifters, v.end_walls);
+    case Variant::Law::frictionless:
+      return kernels::frictionless(v.one_material, v.lifters, v.end_walls);
+    case Variant::Law::elastic:
+      return kernels::elastic(v.one_material, v.lifters, v.end_walls);
+    case Variant::Law::clamped:
+      return kernels::clamped(v.one_material, v.lifters, v.end_walls);
+  }
+  throw std::logic_error("unknown contact law");
+}
+
+bool has_friction(const Variant& v) {
+  return v.law == Variant::Law::hertz_mindlin || v.law == Variant::Law::clamped;
+}
+
+double default_skin(const std::vector<double>& radius) {
+  // 0.4 r_min: 5 mm for the pilot mill's 12.5 mm balls, as the LIGGGHTS yardstick uses.
+  return 0.4 * *std::min_element(radius.begin(), radius.end());
+}
+
+}  // namespace
+
+std::string Variant::describe() const {
+  static const char* laws[] = {"hertz-mindlin", "hertz-mindlin without friction",
+                               "hertz elastic without friction", "hertz-mindlin, clamped"};
+  std::string s = laws[static_cast<int>(law)];
+  s += one_material ? ", one material" : ", pair table";
+  s += lifters ? ", lifters" : ", no lifters";
+  s += end_walls ? ", end walls" : ", periodic ends";
+  return s;
+}
+
+Engine::Engine(Config config)
+    : config_((validate(config), std::move(config))),
+      n_(config_.radius.size()),
+      dt_(config_.dt),
+      threads_(config_.threads),
+      pairs_(config_.materials, config_.restitution, config_.friction),
+      list_(config_.skin > 0.0 ? config_.skin : default_skin(config_.radius),
+            0, config_.geometry.end_walls ? 0.0 : config_.geometry.length) {
+  variant_ = choose_variant(config_, pairs_);
+  kernel_ = kernel_of(variant_);
+  const bool friction = has_friction(variant_);
+  list_ = neighbors::VerletList(list_.skin(), friction ? 3 : 0,
+                                config_.geometry.end_walls ? 0.0 : config_.geometry.length);
+
+  for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_, &ty_,
+                  &tz_, &x_ref_, &y_ref_, &z_ref_})
+    v->assign(n_, 0.0);
+  r_ = config_.radius;
+  mat_ = config_.material;
+  m_.resize(n_);
+  inv_m_.resize(n_);
+  inv_i_.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) {
+    const auto& mat = config_.materials[static_cast<std::size_t>(mat_[i])];
+    m_[i] = materials::sphere_mass(mat.density, r_[i]);
+    inv_m_[i] = 1.0 / m_[i];
+    inv_i_[i] = 1.0 / (0.4 * m_[i] * r_[i] * r_[i]);  // solid sphere, I = 2/5 m r^2
+  }
+  wall_history_.assign(friction ? n_ * wall_slots * 3 : 0, 0.0);
+  wall_lifter_.assign(2 * n_, -1);
+  buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>(6 * n_, 0.0));
+  row_split_.assign(static_cast<std::size_t>(threads_) + 1, 0);
+}
+
+double Engine::bytes_per_particle() const {
+  auto bytes = [](const auto& v) { return static_cast<double>(v.capacity() * sizeof(v[0])); };
+  double total = 0.0;
+  for (const auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_,
+                        &ty_, &tz_, &r_, &m_, &inv_m_, &inv_i_, &x_ref_, &y_ref_, &z_ref_,
+                        &wall_history_})
+    total += bytes(*v);
+  total += bytes(mat_) + bytes(wall_lifter_);
+  for (const auto& b : buffers_) total += bytes(b);
+  total += bytes(list_.start()) + bytes(list_.partner()) + bytes(list_.history());
+  return total / static_cast<double>(n_);
+}
+
+void Engine::start_rotation(double omega) {
+  if (!std::isfinite(omega)) invalid("omega", omega, "finite (rad/s)");
+  omega_ = omega;
+  rotation_start_ = step_;
+  last_sample_offset_ = -1;
+}
+
+namespace {
+void copy_in(const double* xyz, std::size_t n, std::vector<double>& a, std::vector<double>& b,
+             std::vector<double>& c, const char* what) {
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(xyz[3 * i]) || !std::isfinite(xyz[3 * i + 1]) ||
+        !std::isfinite(xyz[3 * i + 2])) {
+      throw std::invalid_argument(std::string(what) + "[" + std::to_string(i) +
+                                  "] is not finite; every value must be");
+    }
+    a[i] = xyz[3 * i];
+    b[i] = xyz[3 * i + 1];
+    c[i] = xyz[3 * i + 2];
+  }
+}
+std::vector<double> copy_out(const std::vector<double>& a, const std::vector<double>& b,
+                             const std::vector<double>& c) {
+  std::vector<double> out(3 * a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    out[3 * i] = a[i];
+    out[3 * i + 1] = b[i];
+    out[3 * i + 2] = c[i];
+  }
+  return out;
+}
+}  // namespace
+
+void Engine::set_positions(const double* xyz) {
+  copy_in(xyz, n_, x_, y_, z_, "positions");
+  // A new configuration: no contact history survives, the list is built afresh.
+  list_ = neighbors::VerletList(list_.skin(), list_.history_size(),
+                                config_.geometry.end_walls ? 0.0 : config_.geometry.length);
+  std::fill(wall_history_.begin(), wall_history_.end(), 0.0);
+  std::fill(wall_lifter_.begin(), wall_lifter_.end(), -1);
+  forces_valid_ = false;
+}
+void Engine::set_velocities(const double* v) {
+  copy_in(v, n_, vx_, vy_, vz_, "velocities");
+  forces_valid_ = false;
+}
+void Engine::set_spins(const double* w) {
+  copy_in(w, n_, wx_, wy_, wz_, "spins");
+  forces_valid_ = false;
+}
+std::vector<double> Engine::positions() const { return copy_out(x_, y_, z_); }
+std::vector<double> Engine::velocities() const { return copy_out(vx_, vy_, vz_); }
+std::vector<double> Engine::spins() const { return copy_out(wx_, wy_, wz_); }
+
+void Engine::advance(long steps) {
+  if (steps < 0) invalid("steps", static_cast<double>(steps), ">= 0");
+  kernel_(*this, steps, nullptr);
+}
+
+namespace {
+
+/// Takes torque samples at the steps nearest k sample_dt after the start of rotation.
+class Sampler final : public StepObserver {
+ public:
+  Sampler(double sample_dt, double dt, bool mean, long first, long count, long rotation_start)
+      : ratio_(sample_dt / dt), sample_dt_(sample_dt), mean_(mean), k_(first), left_(count),
+        rotation_start_(rotation_start) {}
+
+  long target(long k) const { return std::llround(static_cast<double>(k) * ratio_); }
+  long last_offset() const { return mean_ ? target(k_ + left_) : target(k_ + left_ - 1); }
+
+  void record(const Torque& t) {
+    out.insert(out.end(), {static_cast<double>(k_) * sample_dt_, t.total, t.shell, t.lifters, t.ends});
+    ++k_;
+    --left_;
+  }
+
+  bool after_step(const Engine& e) override {
+    if (left_ <= 0) return true;
+    const long offset = e.step_count() - rotation_start_;
+    const Torque t = e.torque();
+    if (!mean_) {
+      if (offset == target(k_)) {
+        record(t);
+        last_sampled = offset;
+      }
+    } else if (offset > target(k_) && offset <= target(k_ + 1)) {
+      sum_.total += t.total;
+      sum_.shell += t.shell;
+      sum_.lifters += t.lifters;
+      sum_.ends += t.ends;
+      ++terms_;
+      if (offset == target(k_ + 1)) {
+        const double w = 1.0 / static_cast<double>(terms_);
+        record(Torque{sum_.total * w, sum_.shell * w, sum_.lifters * w, sum_.ends * w});
+        last_sampled = offset;
+        sum_ = Torque{};
+        terms_ = 0;
+      }
+    }
+    return left_ <= 0;
+  }
+
+  std::vector<double> out;
+  long last_sampled = -1;
+
+ private:
+  double ratio_, sample_dt_;
+  bool mean_;
+  long k_, left_, rotation_start_;
+  Torque sum_;
+  long terms_ = 0;
+};
+
+}  // namespace
+
+std::vector<double> Engine::advance_sampled(double sample_dt, bool mean, long count) {
+  if (rotation_start_ < 0)
+    throw std::logic_error("the drum has not started rotating; call start_rotation first");
+  if (!(sample_dt >= dt_) || !std::isfinite(sample_dt))
+    invalid("sample_dt", sample_dt, ">= the time step dt = " + std::to_string(dt_) + " s");
+  if (count < 1) invalid("count", static_cast<double>(count), ">= 1");
+  const long offset = step_ - rotation_start_;
+  // The first sample not taken yet: instantaneous samples at or after now (but not the one
+  // just taken), interval means of intervals that start now or later.
+  Sampler probe(sample_dt, dt_, mean, 0, 1, rotation_start_);
+  long first = static_cast<long>(std::floor(static_cast<double>(offset) * dt_ / sample_dt));
+  first = std::max(first - 1, 0L);
+  while (probe.target(first) < offset || (!mean && probe.target(first) <= last_sample_offset_))
+    ++first;
+  Sampler sampler(sample_dt, dt_, mean, first, count, rotation_start_);
+  kernel_(*this, 0, nullptr);  // the forces (and torque) of the current state
+  if (!mean && sampler.target(first) == offset) {
+    sampler.record(torque_);
+    sampler.last_sampled = offset;
+  }
+  const long steps = sampler.last_offset() - offset;
+  kernel_(*this, steps, &sampler);
+  if (sampler.last_sampled >= 0) last_sample_offset_ = sampler.last_sampled;
+  return std::move(sampler.out);
+}
+
+double Engine::kinetic_energy() const {
+  double e = 0.0;
+  for (std::size_t i = 0; i < n_; ++i) {
+    const double v2 = vx_[i] * vx_[i] + vy_[i] * vy_[i] + vz_[i] * vz_[i];
+    const double w2 = wx_[i] * wx_[i] + wy_[i] * wy_[i] + wz_[i] * wz_[i];
+    e += 0.5 * m_[i] * v2 + 0.5 * (0.4 * m_[i] * r_[i] * r_[i]) * w2;
+  }
+  return e;
+}
+
+double Engine::potential_energy() const {
+  double e = 0.0;
+  for (std::size_t i = 0; i < n_; ++i) e += m_[i] * config_.gravity * y_[i];
+  return e;
+}
+
+namespace {
+/// Visits every touching contact: f(pair constants, overlap, R*, smaller radius, history or null).
+template <class F>
+void for_each_contact(const Engine& e, const materials::PairTable& table, const Config& c,
+                      const std::vector<double>& x, const std::vector<double>& y,
+                      const std::vector<double>& z, const neighbors::VerletList& list,
+                      const std::vector<double>& wall_history,
+                      const std::vector<std::int32_t>& wall_lifter, F&& f) {
+  const auto& r = e.radius();
+  const std::size_t hs = list.history_size();
+  const double period = c.geometry.length;
+  const bool listed = list.start().size() == e.size() + 1;  // not before the first build
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    for (std::uint32_t s = listed ? list.start()[i] : 0; listed && s < list.start()[i + 1]; ++s) {
+      const std::size_t j = list.partner()[s];
+      double dz = z[i] - z[j];
+      if (!c.geometry.end_walls) dz -= period * std::nearbyint(dz / period);
+      const double dist = std::sqrt((x[i] - x[j]) * (x[i] - x[j]) + (y[i] - y[j]) * (y[i] - y[j]) + dz * dz);
+      const double d_n = r[i] + r[j] - dist;
+      if (d_n <= 0.0) continue;
+      const auto& p = table(static_cast<std::size_t>(c.material[i]), static_cast<std::size_t>(c.material[j]));
+      f(p, d_n, r[i] * r[j] / (r[i] + r[j]), std::min(r[i], r[j]),
+        hs > 0 ? list.history().data() + s * hs : nullptr);
+    }
+    const auto found = drum::find_contacts(c.geometry, e.drum_angle(), contact::Vec3(x[i], y[i], z[i]), r[i]);
+    for (int k = 0; k < found.count; ++k) {
+      const auto& wc = found.items[static_cast<std::size_t>(k)];
+      const double* hist = nullptr;
+      if (!wall_history.empty()) {
+        std::size_t slot = static_cast<std::size_t>(wc.part);
+        if (wc.part == drum::Part::lifter) slot = wall_lifter[2 * i] == wc.index ? 3 : 4;
+        hist = wall_history.data() + (i * wall_slots + slot) * 3;
+      }
+      const auto& p = table(static_cast<std::size_t>(c.material[i]), static_cast<std::size_t>(c.drum_material));
+      f(p, wc.overlap, r[i], r[i], hist);
+    }
+  }
+}
+}  // namespace
+
+double Engine::elastic_energy() const {
+  double u = 0.0;
+  const bool friction = has_friction(variant_);
+  for_each_contact(*this, pairs_, config_, x_, y_, z_, list_, wall_history_, wall_lifter_,
+                   [&](const materials::PairConstants& p, double d_n, double r_star, double,
+                       const double* hist) {
+                     const double sqrt_rd = std::sqrt(r_star * d_n);
+                     u += contact::HertzElastic::energy(p, sqrt_rd, d_n);
+                     if (friction && hist != nullptr) u += contact::MindlinFriction::energy(p, sqrt_rd, hist);
+                   });
+  return u;
+}
+
+double Engine::max_overlap_ratio() const {
+  double worst = 0.0;
+  for_each_contact(*this, pairs_, config_, x_, y_, z_, list_, wall_history_, wall_lifter_,
+                   [&](const materials::PairConstants&, double d_n, double, double r_small,
+                       const double*) { worst = std::max(worst, d_n / r_small); });
+  return worst;
+}
+
+Engine::Snapshot Engine::snapshot() const {
+  Snapshot s;
+  s.x = positions();
+  s.v = velocities();
+  s.w = spins();
+  s.f = copy_out(fx_, fy_, fz_);
+  s.t = copy_out(tx_, ty_, tz_);
+  s.x_ref = copy_out(x_ref_, y_ref_, z_ref_);
+  s.wall_history = wall_history_;
+  s.wall_lifter = wall_lifter_;
+  s.list_start = list_.start();
+  s.list_partner = list_.partner();
+  s.list_history = list_.history();
+  s.step = step_;
+  s.rotation_start = rotation_start_;
+  s.last_sample_offset = last_sample_offset_;
+  s.list_builds = list_.builds();
+  s.theta = theta_;
+  s.omega = omega_;
+  s.forces_valid = forces_valid_;
+  s.torque = torque_;
+  s.ledger = ledger_;
+  return s;
+}
+
+void Engine::restore(const Snapshot& s) {
+  const std::size_t n3 = 3 * n_;
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("the snapshot does not fit this engine: " + what);
+  };
+  for (const auto* a : {&s.x, &s.v, &s.w, &s.f, &s.t, &s.x_ref})
+    require(a->size() == n3, "a state array has " + std::to_string(a->size()) + " values, not " + std::to_string(n3));
+  require(s.wall_history.size() == wall_history_.size(), "wall history size");
+  require(s.wall_lifter.size() == wall_lifter_.size(), "wall lifter slots size");
+  require(s.step >= 0, "step < 0");
+  list_.restore(n_, s.list_start, s.list_partner, s.list_history, s.list_builds);
+  copy_in(s.x.data(), n_, x_, y_, z_, "positions");
+  copy_in(s.v.data(), n_, vx_, vy_, vz_, "velocities");
+  copy_in(s.w.data(), n_, wx_, wy_, wz_, "spins");
+  copy_in(s.f.data(), n_, fx_, fy_, fz_, "forces");
+  copy_in(s.t.data(), n_, tx_, ty_, tz_, "torques");
+  copy_in(s.x_ref.data(), n_, x_ref_, y_ref_, z_ref_, "reference positions");
+  wall_history_ = s.wall_history;
+  wall_lifter_ = s.wall_lifter;
+  step_ = s.step;
+  rotation_start_ = s.rotation_start;
+  last_sample_offset_ = s.last_sample_offset;
+  theta_ = s.theta;
+  omega_ = s.omega;
+  forces_valid_ = s.forces_valid;
+  torque_ = s.torque;
+  ledger_ = s.ledger;
+  Access::split_rows(*this);
+}
+
+void Engine::Access::rebuild(Engine& e) {
+  e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_);
+  e.x_ref_ = e.x_;
+  e.y_ref_ = e.y_;
+  e.z_ref_ = e.z_;
+  split_rows(e);
+}
+
+void Engine::Access::split_rows(Engine& e) {
+  // Rows go to threads in contiguous blocks holding about the same number of pairs.
+  const auto& start = e.list_.start();
+  const std::size_t team = static_cast<std::size_t>(e.threads_);
+  const double pairs = static_cast<double>(start.empty() ? 0 : start.back());
+  e.row_split_.assign(team + 1, e.n_);
+  e.row_split_[0] = 0;
+  std::size_t row = 0;
+  for (std::size_t t = 1; t < team; ++t) {
+    const double goal = pairs * static_cast<double>(t) / static_cast<double>(team);
+    while (row < e.n_ && static_cast<double>(start[row]) < goal) ++row;
+    e.row_split_[t] = row;
+  }
+}
+
+std::string Engine::Access::describe_bad(const Engine& e, std::size_t i) {
+  std::ostringstream msg;
+  msg.precision(6);
+  const double rho = std::hypot(e.x_[i], e.y_[i]);
+  msg << "the simulation stopped at step " << e.step_ << " (t = " << e.time() << " s): particle "
+      << i << " (radius " << e.r_[i] << " m, material " << e.mat_[i] << ") ";
+  const double values[] = {e.x_[i], e.y_[i], e.z_[i], e.vx_[i], e.vy_[i], e.vz_[i],
+                           e.fx_[i], e.fy_[i], e.fz_[i]};
+  const bool finite = std::all_of(std::begin(values), std::end(values),
+                                  [](double v) { return std::isfinite(v); });
+  if (!finite) {
+    msg << "has non-finite values";
+  } else {
+    msg << "has left the drum: its centre is " << rho << " m from the axis, beyond the shell at "
+        << e.config_.geometry.radius << " m";
+  }
+  msg << " (position " << e.x_[i] << ", " << e.y_[i] << ", " << e.z_[i] << " m; velocity "
+      << e.vx_[i] << ", " << e.vy_[i] << ", " << e.vz_[i] << " m/s; force " << e.fx_[i] << ", "
+      << e.fy_[i] << ", " << e.fz_[i] << " N). Hint: the time step (" << e.dt_
+      << " s) is probably too large for the contact stiffness or the impact speeds; try a "
+         "smaller dt, or check the initial positions for large overlaps.";
+  return msg.str();
+}
+
+}  // namespace millscope::engine
