@@ -236,9 +236,11 @@ class Sampler final : public StepObserver {
   Sampler(double sample_dt, double dt, bool mean, long first, long count, long rotation_start)
       : ratio_(sample_dt / dt), sample_dt_(sample_dt), mean_(mean), k_(first), left_(count),
         rotation_start_(rotation_start) {}
+  // The mean of sample k covers the steps ending in (t_(k-1), t_k]; instantaneous samples take
+  // the torque of the step nearest t_k.
 
   long target(long k) const { return std::llround(static_cast<double>(k) * ratio_); }
-  long last_offset() const { return mean_ ? target(k_ + left_) : target(k_ + left_ - 1); }
+  long last_offset() const { return target(k_ + left_ - 1); }
 
   void record(const Torque& t) {
     out.insert(out.end(), {static_cast<double>(k_) * sample_dt_, t.total, t.shell, t.lifters, t.ends});
@@ -250,24 +252,23 @@ class Sampler final : public StepObserver {
     if (left_ <= 0) return true;
     const long offset = e.step_count() - rotation_start_;
     const Torque t = e.torque();
-    if (!mean_) {
-      if (offset == target(k_)) {
-        record(t);
-        last_sampled = offset;
-      }
-    } else if (offset > target(k_) && offset <= target(k_ + 1)) {
+    if (mean_) {
       sum_.total += t.total;
       sum_.shell += t.shell;
       sum_.lifters += t.lifters;
       sum_.ends += t.ends;
       ++terms_;
-      if (offset == target(k_ + 1)) {
+    }
+    if (offset == target(k_)) {
+      if (mean_) {
         const double w = 1.0 / static_cast<double>(terms_);
         record(Torque{sum_.total * w, sum_.shell * w, sum_.lifters * w, sum_.ends * w});
-        last_sampled = offset;
         sum_ = Torque{};
         terms_ = 0;
+      } else {
+        record(t);
       }
+      last_sampled = offset;
     }
     return left_ <= 0;
   }
@@ -292,19 +293,13 @@ std::vector<double> Engine::advance_sampled(double sample_dt, bool mean, long co
     invalid("sample_dt", sample_dt, ">= the time step dt = " + std::to_string(dt_) + " s");
   if (count < 1) invalid("count", static_cast<double>(count), ">= 1");
   const long offset = step_ - rotation_start_;
-  // The first sample not taken yet: instantaneous samples at or after now (but not the one
-  // just taken), interval means of intervals that start now or later.
+  // Sample k is stamped t_k = k sample_dt and covers (t_(k-1), t_k]: the first sample of this
+  // call is the first whose interval starts now or later, so a run of n samples from a sample
+  // time advances exactly n sample_dt.
   Sampler probe(sample_dt, dt_, mean, 0, 1, rotation_start_);
-  long first = static_cast<long>(std::floor(static_cast<double>(offset) * dt_ / sample_dt));
-  first = std::max(first - 1, 0L);
-  while (probe.target(first) < offset || (!mean && probe.target(first) <= last_sample_offset_))
-    ++first;
+  long first = std::max(1L, static_cast<long>(std::floor(static_cast<double>(offset) * dt_ / sample_dt)) - 1);
+  while (probe.target(first - 1) < offset || probe.target(first) <= last_sample_offset_) ++first;
   Sampler sampler(sample_dt, dt_, mean, first, count, rotation_start_);
-  kernel_(*this, 0, nullptr);  // the forces (and torque) of the current state
-  if (!mean && sampler.target(first) == offset) {
-    sampler.record(torque_);
-    sampler.last_sampled = offset;
-  }
   const long steps = sampler.last_offset() - offset;
   kernel_(*this, steps, &sampler);
   if (sampler.last_sampled >= 0) last_sample_offset_ = sampler.last_sampled;

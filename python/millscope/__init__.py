@@ -6,10 +6,12 @@ The public API (DESIGN.md section 5) is re-exported here; submodules hold the de
 from importlib import import_module as _import_module
 from typing import Any as _Any
 
-from . import contact, drivetrain
+from . import contact, drivetrain, presets
 from ._core import build_info as _build_info
 from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
 from .record import RecordError, TorqueRecord
+from .scene import Drum, Fraction, Lifters, Material, Pair, Scene
+from .simulation import CheckpointError, SettleWarning, Simulation
 from .spectral import (
     Peak,
     SpectralEnergy,
@@ -34,6 +36,15 @@ def __getattr__(name: str) -> _Any:
 
 __all__ = [
     "Calibration",
+    "CheckpointError",
+    "Drum",
+    "Fraction",
+    "Lifters",
+    "Material",
+    "Pair",
+    "Scene",
+    "SettleWarning",
+    "Simulation",
     "FillEstimate",
     "LogFit",
     "Peak",
@@ -50,6 +61,7 @@ __all__ = [
     "lifter_harmonic_hz",
     "log_fit",
     "plots",
+    "presets",
     "spectral_energy",
     "spectrum",
     "window_factors",

@@ -119,9 +119,9 @@ struct TangentialResult {
   Vec3 force;            // F_t on i, N (in the tangent plane)
   bool sliding;          // the Coulomb limit (8) was reached this step
   double damping_power;  // gamma_t |v_t|^2 while sticking, W (>= 0); 0 while sliding
-  double friction_loss;  // energy lost this step beyond the damping, J: the tangential work
-                         // -F_t . v_t dt less the change of the spring's energy, less the
-                         // damping's share (a sliding step counts its whole loss here)
+  double friction_loss;  // energy lost to Coulomb sliding this step, J (0 while sticking):
+                         // the tangential work -F_t . v_t dt less the change of the spring's
+                         // energy
 };
 
 /// Mindlin no-slip spring with damping and Coulomb limit; history: d_t (3 doubles, m).
@@ -168,11 +168,15 @@ struct MindlinFriction {
       d_t = -f_t / s_t;              // s_t > 0 whenever d_n > 0
       damping_power = 0.0;
     }
-    // Energy balance of the tangential spring over the step (spring energy S_t |d_t|^2 / 2,
-    // both ends at the current S_t): work in = -F_t . v_t dt = change of spring energy + loss.
-    const double work_in = -f_t.dot(k.v_t) * dt;
-    const double spring_change = 0.5 * s_t * (d_t.squaredNorm() - before2);
-    const double friction_loss = work_in - spring_change - damping_power * dt;
+    // Energy lost to sliding this step: the tangential work -F_t . v_t dt less the change of
+    // the spring's energy S_t |d_t|^2 / 2 (both at the current S_t). While sticking there is
+    // none: velocity Verlet moves the spring energy back and forth without loss (the work
+    // over a step, with the force averaged over its ends, equals the energy change exactly),
+    // and the dashpot's share is damping_power.
+    double friction_loss = 0.0;
+    if (sliding) {
+      friction_loss = -f_t.dot(k.v_t) * dt - 0.5 * s_t * (d_t.squaredNorm() - before2);
+    }
     return TangentialResult{f_t, sliding, damping_power, friction_loss};
   }
   /// Energy held by the tangential spring, S_t |d_t|^2 / 2, J (S_t at the current overlap).

@@ -141,8 +141,10 @@ class Engine {
   /// Advances `steps` steps.
   void advance(long steps);
   /// Advances until `count` more torque samples were taken at interval `sample_dt` (s) from the
-  /// start of rotation. Sample k belongs to time k sample_dt: "instant" takes the torque of the
-  /// step nearest that time, "mean" the mean over the steps ending in (t_k, t_k + sample_dt].
+  /// start of rotation. Sample k (k >= 1) is stamped t_k = k sample_dt and covers
+  /// (t_(k-1), t_k]: "instant" takes the torque of the step nearest t_k, "mean" the mean over
+  /// the steps ending in that interval. A call starting at a sample time advances exactly
+  /// count x sample_dt.
   /// Returns count x 5 values: time (s since rotation start), total, shell, lifters, end walls.
   std::vector<double> advance_sampled(double sample_dt, bool mean, long count);
 

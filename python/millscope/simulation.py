@@ -1,0 +1,564 @@
+"""Simulation: fill the drum, settle the charge, spin the drum and record the drive torque.
+
+A :class:`Simulation` runs one :class:`~millscope.scene.Scene` on the C++ engine
+(``cpp/include/millscope/engine.hpp``): Hertz-Mindlin no-slip contacts with damping (paper
+section 3.1, eqs. 1-8), velocity Verlet, gravity along -y, drum axis along +z (DESIGN.md
+section 2).
+
+Life of a simulation::
+
+    sim = Simulation(scene, seed=0)        # checks dt against the Rayleigh time; nothing runs yet
+    rec = sim.run(14.0)                    # fills, settles, starts the drum, records 14 s
+    rec2 = sim.run(2.0)                    # continues (times go on from 14 s)
+    sim.save("case.ckpt"); sim = Simulation.load("case.ckpt")
+
+* **Filling** (:meth:`Simulation.fill`): every fraction, largest first, goes onto a loose cubic
+  lattice of its own (pitch 1.05 d, jittered) clear of the shell, the lifters and the end walls,
+  and of the particles already placed; a fraction takes random sites among the lowest ones, so
+  the bed is mixed and starts near the bottom. Reproducible from ``seed``.
+* **Settling** (:meth:`Simulation.settle`): the drum at rest until 99 % of the particles have a
+  kinetic energy below ``settle_tolerance`` x m g d (after at least ``settle_min_s``);
+  if that takes longer than ``settle_max_s``, a :class:`SettleWarning` says so and it goes on.
+* **Rotation**: the drum starts impulsively at the scene's speed (as the LIGGGHTS yardstick
+  does); record time 0 is the start of rotation.
+* **Sampling**: sample k belongs to t_k = k ``sample_dt``. ``"instant"`` takes the torque of the
+  step nearest t_k (as EDEM writes it; the paper's data); ``"mean"`` averages the steps of
+  (t_k, t_k + sample_dt] (anti-aliased). The record's meta says which.
+
+All quantities are SI. Long runs show a tqdm bar (``progress=False`` turns it off) and Ctrl-C
+stops a run between chunks, keeping what was recorded.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import threading
+import warnings
+import zipfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import _core
+from ._files import atomic_write
+from .contact import DEFAULT_DT_FRACTION, MAX_DT_FRACTION
+from .record import TorqueRecord
+from .scene import Scene
+
+__all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation"]
+
+CHECKPOINT_FORMAT = "millscope-checkpoint-1"
+_FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
+_FILL_JITTER = 0.02  # random offset of a site, in diameters, each axis
+_WALL_GAP = 0.05  # clearance of a placed particle from the drum, in its diameters
+_CHUNK_PARTICLE_STEPS = 2.0e7  # engine work per chunk between progress updates (~1 s)
+
+
+class SettleWarning(RuntimeWarning):
+    """The charge did not come to rest within the settling time limit."""
+
+
+class CheckpointError(ValueError):
+    """A checkpoint file is damaged, from another version, or not a checkpoint at all."""
+
+
+@dataclass(frozen=True)
+class SettleReport:
+    """How the settling went.
+
+    Attributes
+    ----------
+    time_s : float
+        Simulated settling time, s.
+    kinetic_energy_ratio : float
+        The 99th percentile over the particles of kinetic energy / (m g d) at the end.
+    converged : bool
+        Whether the ratio fell below the tolerance within the time limit.
+    """
+
+    time_s: float
+    kinetic_energy_ratio: float
+    converged: bool
+
+
+Phase = Literal["empty", "filled", "settled", "rotating"]
+
+
+class Simulation:
+    """One scene on the DEM engine.
+
+    Parameters
+    ----------
+    scene : Scene
+        What is in the mill (``millscope.presets.pilot_mill`` builds the paper's cases).
+    seed : int
+        Seed of the filling (positions and jitter); the same seed gives the same run.
+    dt : float, optional
+        Time step, s. Default: ``DEFAULT_DT_FRACTION`` (0.2) x the smallest Rayleigh time of the
+        charge. A step above ``MAX_DT_FRACTION`` (0.5) x that time raises ``ValueError``
+        naming the limit and the fraction that sets it.
+    threads : int, optional
+        OpenMP threads of the engine; default: the cores this process may use. Runs are
+        reproducible bit for bit at a given thread count.
+    skin : float, optional
+        Verlet-list skin, m; default 0.4 x the smallest particle radius.
+    settle_tolerance : float
+        Settled when 99 % of the particles have a kinetic energy < this x m g d.
+    settle_min_s, settle_max_s : float
+        Least and most simulated settling time, s.
+    """
+
+    def __init__(self, scene: Scene, seed: int = 0, dt: float | None = None,
+                 threads: int | None = None, *, skin: float | None = None,
+                 settle_tolerance: float = 1e-4, settle_min_s: float = 0.2,
+                 settle_max_s: float = 3.0) -> None:
+        if not isinstance(scene, Scene):
+            raise TypeError(f"scene must be a millscope Scene, not {type(scene).__name__}")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed = {seed!r} is not valid; it must be an integer >= 0")
+        t_rayleigh, which = scene.min_rayleigh_time()
+        limit = MAX_DT_FRACTION * t_rayleigh
+        if dt is None:
+            dt = DEFAULT_DT_FRACTION * t_rayleigh
+        elif not (math.isfinite(dt) and 0.0 < dt <= limit):
+            raise ValueError(
+                f"dt = {dt!r} s is not valid; it must be in (0, {limit:.6g}] s, "
+                f"{MAX_DT_FRACTION} x the Rayleigh time {t_rayleigh:.6g} s of the fraction "
+                f"{which!r}, the stiffest in the charge")
+        if threads is None:
+            threads = _available_cores()
+        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+            raise ValueError(f"threads = {threads!r} is not valid; it must be an integer >= 1")
+        if skin is not None and not (math.isfinite(skin) and skin > 0.0):
+            raise ValueError(f"skin = {skin!r} m is not valid; it must be finite and > 0")
+        for name, value in (("settle_tolerance", settle_tolerance),
+                            ("settle_min_s", settle_min_s), ("settle_max_s", settle_max_s)):
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{name} = {value!r} is not valid; it must be finite and > 0")
+        if settle_max_s < settle_min_s:
+            raise ValueError(f"settle_max_s = {settle_max_s} s is not valid; it must be >= "
+                             f"settle_min_s = {settle_min_s} s")
+
+        self._scene = scene
+        self._seed = int(seed)
+        self._rng = np.random.default_rng(self._seed)
+        self._settle = (float(settle_tolerance), float(settle_min_s), float(settle_max_s))
+        self._engine = _make_engine(scene, float(dt), int(threads), skin)
+        self._phase: Phase = "empty"
+        self.settle_report: SettleReport | None = None
+        #: Torque of the drum's parts over the last run, N m: "shell", "lifters", "ends".
+        self.last_parts: dict[str, NDArray[np.float64]] = {}
+
+    # -- facts -----------------------------------------------------------------------------
+    @property
+    def scene(self) -> Scene:
+        return self._scene
+
+    @property
+    def seed(self) -> int:
+        return self._seed
+
+    @property
+    def dt(self) -> float:
+        """Time step, s."""
+        return float(self._engine.dt)
+
+    @property
+    def threads(self) -> int:
+        return int(self._engine.threads)
+
+    @property
+    def phase(self) -> Phase:
+        """``"empty"`` (nothing placed), ``"filled"`` (placed, not settled), ``"settled"`` (at
+        rest, drum stopped) or ``"rotating"``."""
+        return self._phase
+
+    @property
+    def time(self) -> float:
+        """Time since the start of rotation, s (0 before it)."""
+        if self._phase != "rotating":
+            return 0.0
+        return (self._engine.step_count - self._engine.rotation_start_step) * self.dt
+
+    @property
+    def variant(self) -> str:
+        """Which specialised engine kernel the scene runs on (law, materials, lifters, ends)."""
+        return str(self._engine.variant)
+
+    @property
+    def positions(self) -> NDArray[np.float64]:
+        """Particle centres, (N, 3) m."""
+        return np.asarray(self._engine.positions)
+
+    @property
+    def velocities(self) -> NDArray[np.float64]:
+        """Particle velocities, (N, 3) m/s."""
+        return np.asarray(self._engine.velocities)
+
+    @property
+    def spins(self) -> NDArray[np.float64]:
+        """Particle angular velocities, (N, 3) rad/s."""
+        return np.asarray(self._engine.spins)
+
+    @property
+    def bytes_per_particle(self) -> float:
+        return float(self._engine.bytes_per_particle)
+
+    def energies(self) -> dict[str, float]:
+        """Energies now and work since the start, J.
+
+        ``kinetic``, ``potential`` (m g y, y = 0 on the axis), ``elastic`` (stored in contacts),
+        ``drive_work`` (done by the drive), ``damping_loss`` and ``friction_loss``. They close
+        the balance drive_work = change of (kinetic + potential + elastic) + losses.
+        """
+        e = self._engine
+        out = {"kinetic": e.kinetic_energy(), "potential": e.potential_energy(),
+               "elastic": e.elastic_energy()}
+        out.update(e.ledger())
+        return {k: float(v) for k, v in out.items()}
+
+    def max_overlap_ratio(self) -> float:
+        """Largest contact overlap over the radius of the smaller body (dimensionless)."""
+        return float(self._engine.max_overlap_ratio())
+
+    # -- filling and settling ----------------------------------------------------------------
+    def fill(self) -> None:
+        """Places every particle without overlap inside the drum (reproducible from the seed)."""
+        if self._phase != "empty":
+            raise RuntimeError(f"fill() is for an empty drum; this simulation is {self._phase}")
+        self._engine.positions = _fill_positions(self._scene, self._rng)
+        self._phase = "filled"
+
+    def settle(self, *, progress: bool = True) -> SettleReport:
+        """Lets the charge come to rest in the stopped drum (fills it first if empty)."""
+        if self._phase == "empty":
+            self.fill()
+        if self._phase == "rotating":
+            raise RuntimeError("settle() is for a stopped drum; the drum is already rotating")
+        tolerance, t_min, t_max = self._settle
+        e = self._engine
+        chunk = max(1, int(round(0.02 / self.dt)))
+        elapsed, ratio = 0.0, math.inf
+        with _progress(progress, t_max, "settling", "s") as bar:
+            while True:
+                e.advance(chunk)
+                elapsed += chunk * self.dt
+                ratio = self._rest_measure()
+                bar.update(chunk * self.dt)
+                if elapsed >= t_min and ratio < tolerance:
+                    break
+                if elapsed >= t_max:
+                    warnings.warn(
+                        f"the charge did not settle within settle_max_s = {t_max} s: 99 % of "
+                        f"the particles have a kinetic energy below {ratio:.3g} x m g d "
+                        f"(tolerance {tolerance}); going on", SettleWarning, stacklevel=2)
+                    break
+        self.settle_report = SettleReport(elapsed, ratio, ratio < tolerance)
+        self._phase = "settled"
+        return self.settle_report
+
+    def _rest_measure(self) -> float:
+        """The 99th percentile of kinetic energy / (m g d) over the particles. A percentile, not
+        the mean: without rolling resistance a ball can roll along a trough between lifters
+        for ever (with periodic ends), which must not hold the whole charge up."""
+        e = self._engine
+        m, r = np.asarray(e.mass), np.asarray(e.radius)
+        v, w = np.asarray(e.velocities), np.asarray(e.spins)
+        ke = 0.5 * m * np.sum(v * v, axis=1) + 0.2 * m * r * r * np.sum(w * w, axis=1)
+        return float(np.quantile(ke / (m * self._scene.gravity * 2.0 * r), 0.99))
+
+    # -- running -----------------------------------------------------------------------------
+    def run(self, duration: float, sample_dt: float = 0.01,
+            sampling: Literal["instant", "mean"] = "instant", *,
+            progress: bool = True) -> TorqueRecord:
+        """Runs the rotating mill for ``duration`` s and returns its drive torque.
+
+        The first call fills and settles the charge and starts the drum; record time 0 is the
+        start of rotation, and later calls continue the time axis.
+
+        Parameters
+        ----------
+        duration : float
+            Simulated time to record, s (> 0); rounded to whole samples.
+        sample_dt : float
+            Sampling interval, s (>= dt); 0.01 s in the paper.
+        sampling : {"instant", "mean"}
+            Instantaneous torque at each sample time, or the mean over each interval.
+        progress : bool
+            Show a tqdm progress bar.
+
+        Returns
+        -------
+        TorqueRecord
+            ``time_s`` from the start of rotation, ``torque_Nm`` the drive torque (DESIGN.md
+            sign: positive when the charge resists rotation); ``meta`` holds the scene, dt,
+            seed, rotation frequency, lifter count and sampling mode. The parts (shell,
+            lifters, end walls) are in :attr:`last_parts`. Interrupted with Ctrl-C, the record
+            holds what was sampled and ``meta["interrupted"]`` is true.
+        """
+        if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+            raise ValueError(f"duration = {duration!r} s is not valid; it must be finite and > 0")
+        if not (isinstance(sample_dt, (int, float)) and math.isfinite(sample_dt)
+                and sample_dt >= self.dt):
+            raise ValueError(f"sample_dt = {sample_dt!r} s is not valid; it must be >= the time "
+                             f"step dt = {self.dt:.6g} s")
+        if sampling not in ("instant", "mean"):
+            raise ValueError(f"sampling = {sampling!r} is not valid; it must be 'instant' or "
+                             "'mean'")
+        count = int(round(duration / sample_dt))
+        if count < 2:
+            raise ValueError(f"duration = {duration} s is not valid; it must hold at least 2 "
+                             f"samples of sample_dt = {sample_dt} s")
+        if self._phase in ("empty", "filled"):
+            self.settle(progress=progress)
+        if self._phase == "settled":
+            self._engine.start_rotation(self._scene.omega)
+            self._phase = "rotating"
+
+        e = self._engine
+        steps_per_sample = sample_dt / self.dt
+        per_chunk = max(1, int(_CHUNK_PARTICLE_STEPS / (e.size * steps_per_sample)))
+        rows: list[NDArray[np.float64]] = []
+        taken = 0
+        interrupted = False
+        with _progress(progress, count * sample_dt, "simulating", "s") as bar, \
+                _interrupt_flag() as stop:
+            while taken < count and not stop.is_set():
+                n = min(per_chunk, count - taken)
+                rows.append(np.asarray(e.advance_sampled(sample_dt, sampling == "mean", n)))
+                taken += n
+                bar.update(n * sample_dt)
+            interrupted = taken < count
+        if interrupted:
+            warnings.warn(f"run interrupted: kept {taken} of {count} samples", RuntimeWarning,
+                          stacklevel=2)
+        data = np.concatenate(rows) if rows else np.empty((0, 5))
+        self.last_parts = {"shell": data[:, 2], "lifters": data[:, 3], "ends": data[:, 4]}
+        meta = self._meta(sample_dt, sampling, interrupted)
+        return TorqueRecord(data[:, 0], data[:, 1], meta)
+
+    def _meta(self, sample_dt: float, sampling: str, interrupted: bool) -> dict[str, Any]:
+        lifters = self._scene.drum.lifters
+        return {
+            "source": "millscope DEM",
+            "millscope_version": _core.build_info()["version"],
+            "scene": self._scene.to_dict(),
+            "scene_name": self._scene.name,
+            "dt": self.dt,
+            "seed": self._seed,
+            "threads": self.threads,
+            "rotation_hz": self._scene.rotation_hz,
+            "lifters": 0 if lifters is None else lifters.count,
+            "sampling": sampling,
+            "sample_dt": sample_dt,
+            "engine": self.variant,
+            "interrupted": interrupted,
+        }
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Writes the full state (a checkpoint) to ``path`` (.npz), atomically.
+
+        A simulation loaded from it and run on the same number of threads continues exactly
+        (bit for bit) as this one would.
+        """
+        snap = self._engine.snapshot()
+        arrays = {k: np.asarray(v) for k, v in snap.items() if isinstance(v, np.ndarray)}
+        scalars = {k: v for k, v in snap.items() if not isinstance(v, np.ndarray)}
+        meta = {
+            "format": CHECKPOINT_FORMAT,
+            "millscope_version": _core.build_info()["version"],
+            "scene": self._scene.to_dict(),
+            "seed": self._seed,
+            "dt": self.dt,
+            "threads": self.threads,
+            "skin": float(self._engine.skin),
+            "phase": self._phase,
+            "settle": list(self._settle),
+            "rng_state": self._rng.bit_generator.state,
+            "engine_scalars": {k: list(v) if isinstance(v, tuple) else v
+                               for k, v in scalars.items()},
+        }
+        path = Path(path)
+        with atomic_write(path, "wb") as f:
+            np.savez(f, meta_json=np.array(json.dumps(meta)), **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str], *, threads: int | None = None) -> Simulation:
+        """Reads a checkpoint written by :meth:`save`.
+
+        ``threads`` defaults to the thread count of the saved run (needed for a bit-for-bit
+        continuation). A damaged file, a file that is not a checkpoint or one from another
+        millscope version raises :class:`CheckpointError`.
+        """
+        path = Path(path)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                meta = json.loads(str(z["meta_json"]))
+                arrays = {k: z[k] for k in z.files if k != "meta_json"}
+        except FileNotFoundError:
+            raise
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as exc:
+            raise CheckpointError(f"{path} is damaged or not a millscope checkpoint: {exc}") \
+                from None
+        if not isinstance(meta, dict) or meta.get("format") != CHECKPOINT_FORMAT:
+            raise CheckpointError(f"{path} is not a millscope checkpoint (format "
+                                  f"{meta.get('format') if isinstance(meta, dict) else None!r}, "
+                                  f"expected {CHECKPOINT_FORMAT!r})")
+        version = _core.build_info()["version"]
+        if meta.get("millscope_version") != version:
+            raise CheckpointError(
+                f"{path} was written by millscope {meta.get('millscope_version')}; this is "
+                f"{version}, which cannot continue it exactly. Rerun the case, or load it with "
+                "the version that wrote it.")
+        try:
+            scene = Scene.from_dict(meta["scene"])
+            tol, t_min, t_max = meta["settle"]
+            sim = cls(scene, seed=meta["seed"], dt=meta["dt"],
+                      threads=meta["threads"] if threads is None else threads,
+                      skin=meta["skin"], settle_tolerance=tol, settle_min_s=t_min,
+                      settle_max_s=t_max)
+            snapshot: dict[str, Any] = dict(arrays)
+            for k, v in meta["engine_scalars"].items():
+                snapshot[k] = tuple(v) if isinstance(v, list) else v
+            sim._engine.restore(snapshot)
+            sim._rng.bit_generator.state = meta["rng_state"]
+            sim._phase = meta["phase"]
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CheckpointError(f"{path} is damaged or not a millscope checkpoint: {exc}") \
+                from None
+        return sim
+
+    def __repr__(self) -> str:
+        return (f"Simulation({self._scene.name or 'scene'!r}, {self._engine.size} particles, "
+                f"dt={self.dt:.4g} s, threads={self.threads}, {self._phase})")
+
+
+# -- helpers ---------------------------------------------------------------------------------
+
+def _available_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None) -> Any:
+    drum = scene.drum
+    lifters = drum.lifters
+    geometry_args: dict[str, Any] = {
+        "radius": drum.radius, "length": drum.length, "end_walls": drum.end_walls,
+        "lifters": 0 if lifters is None else lifters.count,
+        "lifter_width": 0.0 if lifters is None else lifters.width,
+        "lifter_height": 0.0 if lifters is None else lifters.height,
+        "lifter_phase": 0.0 if lifters is None else lifters.phase,
+    }
+    if lifters is not None and lifters.profile == "trapezoidal":
+        geometry_args["lifter_top_width"] = lifters.tip_width
+    geometry = _core.DrumGeometry(**geometry_args)
+    restitution, friction = scene.pair_matrices()
+    materials = [_core.Material(m.density, m.shear_modulus, m.poisson) for m in scene.materials]
+    return _core.Engine(materials, restitution, friction, scene.material_index(drum.material),
+                        geometry, scene.particle_radii(), scene.particle_materials(), dt,
+                        gravity=scene.gravity, skin=0.0 if skin is None else skin,
+                        clamp_normal=scene.clamp_normal_force, threads=threads)
+
+
+def _fill_positions(scene: Scene, rng: np.random.Generator) -> NDArray[np.float64]:
+    """Lattice filling, largest fraction first (see the module docstring)."""
+    from scipy.spatial import cKDTree
+
+    drum = scene.drum
+    radius_max = float(np.max(scene.particle_radii()))
+    lifter_height = 0.0 if drum.lifters is None else drum.lifters.height
+    placed: list[NDArray[np.float64]] = []
+    placed_radius: list[NDArray[np.float64]] = []
+    total_volume = scene.charge_volume()
+    order = sorted(range(len(scene.charge)), key=lambda k: -scene.charge[k].diameter)
+    out = [np.empty((0, 3))] * len(scene.charge)
+    for rank, k in enumerate(order):
+        frac = scene.charge[k]
+        d, r = frac.diameter, frac.diameter / 2.0
+        pitch = _FILL_PITCH * d
+        reach = drum.radius - lifter_height - r - _WALL_GAP * d
+        axis = np.arange(-reach, reach + 1e-12, pitch)
+        if drum.end_walls:
+            zs = np.arange(r + _WALL_GAP * d, drum.length - r - _WALL_GAP * d + 1e-12, pitch)
+        else:
+            n_z = max(1, int(drum.length // pitch))
+            zs = (np.arange(n_z) + 0.5) * (drum.length / n_z)
+        gx, gy, gz = np.meshgrid(axis, axis, zs, indexing="ij")
+        sites = np.column_stack([gx.ravel(), gy.ravel(), gz.ravel()])
+        sites += rng.uniform(-_FILL_JITTER * d, _FILL_JITTER * d, sites.shape)
+        sites = sites[np.hypot(sites[:, 0], sites[:, 1]) <= reach]
+        if not drum.end_walls:
+            sites[:, 2] %= drum.length
+        if placed:
+            centres = np.concatenate(placed)
+            radii = np.concatenate(placed_radius)
+            tree = cKDTree(centres, boxsize=None)
+            near = tree.query_ball_point(sites, r + radius_max + _WALL_GAP * d)
+            keep = np.ones(len(sites), dtype=bool)
+            for s, idx in enumerate(near):
+                if idx:
+                    gap = np.linalg.norm(centres[idx] - sites[s], axis=1) - radii[idx] - r
+                    keep[s] = bool(np.all(gap > _WALL_GAP * d))
+            sites = sites[keep]
+        if len(sites) < frac.count:
+            raise ValueError(
+                f"the charge does not fit: fraction {frac.name or frac.material!r} needs "
+                f"{frac.count} places but the filling lattice has {len(sites)} left; the "
+                "charge is too large for this drum")
+        # Random sites among the lowest ones: the largest fraction spreads over the height
+        # the whole charge will take, the later ones fill what is left from the bottom up.
+        spread = total_volume / (frac.count * math.pi * d**3 / 6.0) if rank == 0 else 1.0
+        lowest = np.argsort(sites[:, 1], kind="stable")
+        pool = lowest[: min(len(sites), max(frac.count, int(math.ceil(frac.count * spread))))]
+        chosen = sites[rng.choice(pool, size=frac.count, replace=False)]
+        out[k] = chosen
+        placed.append(chosen)
+        placed_radius.append(np.full(frac.count, r))
+    return np.concatenate(out)
+
+
+@contextmanager
+def _progress(enabled: bool, total: float, desc: str, unit: str) -> Iterator[Any]:
+    if not enabled:
+        class _Silent:
+            def update(self, _n: float) -> None:
+                pass
+        yield _Silent()
+        return
+    from tqdm.auto import tqdm
+
+    with tqdm(total=total, desc=desc, unit=unit, unit_scale=False,
+              bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s [{elapsed}<{remaining}]") as bar:
+        yield bar
+
+
+@contextmanager
+def _interrupt_flag() -> Iterator[threading.Event]:
+    """Turns Ctrl-C into a flag checked between chunks (main thread only)."""
+    stop = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+    previous = signal.getsignal(signal.SIGINT)
+
+    def handler(_signum: int, _frame: Any) -> None:
+        stop.set()
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, previous)

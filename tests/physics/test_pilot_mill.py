@@ -1,0 +1,81 @@
+"""The balls-only pilot mill at reduced stiffness (scale "soft": the paper's geometry and
+2466 balls, shear modulus x 0.001), end to end through Simulation: the torque spectrum peaks at
+n_lifters x f_rot, and the drive's power equals the dissipation (power balance). One run
+shared by the tests of this module (about 20 s on 2 cores).
+
+Interval-mean sampling: instantaneous 10 ms samples alias the impact noise into 0-50 Hz and,
+in 2 s blocks, bury the lifter harmonic (DESIGN.md section 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import millscope as ms
+
+RUN_S = 3.0  # simulated after settling, s
+STEADY_FROM_S = 1.0  # the charge has found its shape after about 1 s
+
+
+@pytest.fixture(scope="module")
+def mill_run():  # type: ignore[no-untyped-def]
+    scene = ms.presets.pilot_mill(0.71, None, scale="soft")
+    sim = ms.Simulation(scene, seed=1, threads=2)
+    sim.settle(progress=False)
+    sim.run(STEADY_FROM_S, progress=False)
+    before = sim.energies()
+    rec = sim.run(RUN_S - STEADY_FROM_S, sampling="mean", progress=False)
+    after = sim.energies()
+    return scene, sim, rec, before, after
+
+
+def test_torque_spectrum_peaks_at_the_lifter_harmonic(mill_run) -> None:  # type: ignore[no-untyped-def]
+    scene, _, rec, _, _ = mill_run
+    f_lth = ms.lifter_harmonic_hz(16, scene.rotation_hz)
+    # the strongest line between 4 and 13 Hz (the paper: "the more significant harmonic
+    # closest to 10 Hz") is the LTH, within the Hann main lobe +- 2 / TR
+    top = ms.find_peak(rec, 8.5, search_hz=4.5)
+    assert top.frequency_hz == pytest.approx(f_lth, abs=2.0 / rec.duration_s)
+    spec = ms.spectrum(rec)
+    band = (spec.freq > 4.0) & (spec.freq < 13.0)
+    assert top.amplitude > 1.5 * np.median(spec.amplitude[band])
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "open: the losses come out about 4.5 % above the drive power (soft pilot mill, 71 %); "
+    "suspected bias of the damping-loss estimate gamma v_(n+1/2)^2, while velocity Verlet "
+    "removes about F_d . v_(n+1) per step; see the issue-3 note"))
+def test_drive_power_equals_dissipation(mill_run) -> None:  # type: ignore[no-untyped-def]
+    """Over a steady stretch: omega x mean torque = mean (damping + friction) loss rate, within
+    3 %; the stored energies change little, and the full balance closes tighter still."""
+    scene, _, rec, before, after = mill_run
+    span = RUN_S - STEADY_FROM_S
+    drive_power = scene.omega * rec.mean_torque_Nm
+    ledger_drive = (after["drive_work"] - before["drive_work"]) / span
+    loss = ((after["damping_loss"] - before["damping_loss"])
+            + (after["friction_loss"] - before["friction_loss"])) / span
+    stored = sum(after[k] - before[k] for k in ("kinetic", "potential", "elastic")) / span
+    # the interval means cover every step; samples span whole steps, so up to dt / sample_dt
+    assert drive_power == pytest.approx(ledger_drive, rel=1e-3)
+    assert ledger_drive == pytest.approx(loss, rel=0.03)
+    assert ledger_drive == pytest.approx(loss + stored, rel=0.01)
+
+
+def test_mean_torque_is_positive_and_scales_to_the_paper_mill(mill_run) -> None:  # type: ignore[no-untyped-def]
+    """The charge resists rotation (positive torque, DESIGN.md sign), near the 265 N m of the
+    balls-only pilot mill at 71 % (DESIGN.md section 2); 10 % for the softer material and a
+    2 s mean."""
+    _, _, rec, _, _ = mill_run
+    assert rec.mean_torque_Nm == pytest.approx(265.0, rel=0.10)
+
+
+def test_record_meta_says_how_it_was_made(mill_run) -> None:  # type: ignore[no-untyped-def]
+    scene, sim, rec, _, _ = mill_run
+    meta = rec.meta
+    assert meta["lifters"] == 16 and meta["sampling"] == "mean" and meta["seed"] == 1
+    assert meta["rotation_hz"] == pytest.approx(scene.rotation_hz)
+    assert meta["dt"] == sim.dt
+    assert ms.Scene.from_dict(meta["scene"]) == scene
+    assert rec.time_s[0] == pytest.approx(STEADY_FROM_S + 0.01)  # the time axis continues
+    assert sim.time == pytest.approx(RUN_S, abs=sim.dt)
+    assert rec.dt == pytest.approx(0.01)
