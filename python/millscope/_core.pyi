@@ -1,6 +1,6 @@
 """Type stubs of the private C++ extension (see cpp/bindings/)."""
 
-from typing import Any
+from typing import Any, Literal, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -152,6 +152,42 @@ def wall_contact(constants: PairConstants, x_i: Vec3, v_i: Vec3, w_i: Vec3, radi
                  mass_i: float, normal: Vec3, overlap: float, wall_velocity: Vec3,
                  history: list[float], dt: float, friction: bool = True,
                  clamp_normal: bool = False) -> ContactEvaluation: ...
+
+# -- drum geometry (cpp/bindings/bind_drum.cpp) ------------------------------------------------
+
+class DrumGeometry:
+    """Lifters are trapezoidal when lifter_top_width is given (width at the tip, in
+    (0, lifter_width]), rectangular when it is None."""
+    def __init__(self, radius: float, length: float, end_walls: bool, lifters: int,
+                 lifter_width: float, lifter_height: float, lifter_phase: float = 0.0,
+                 lifter_top_width: float | None = None) -> None: ...
+    @property
+    def radius(self) -> float: ...
+    @property
+    def length(self) -> float: ...
+    @property
+    def end_walls(self) -> bool: ...
+    @property
+    def lifters(self) -> int: ...
+    @property
+    def lifter_width(self) -> float: ...
+    @property
+    def lifter_height(self) -> float: ...
+    @property
+    def lifter_phase(self) -> float: ...
+    @property
+    def lifter_top_width(self) -> float:
+        """Width at the tip in use, m: lifter_width for rectangular lifters."""
+
+class _DrumContact(TypedDict):  # stub only: the dicts drum_contacts returns
+    part: Literal["shell", "end_low", "end_high", "lifter"]
+    index: int
+    overlap: float
+    normal: NDArray[np.float64]
+    point: NDArray[np.float64]
+
+def drum_contacts(geometry: DrumGeometry, theta: float, x: Vec3,
+                  radius: float) -> list[_DrumContact]: ...
 
 class VerletList:
     def __init__(self, skin: float, history_size: int, period_z: float = 0.0) -> None: ...
