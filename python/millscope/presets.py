@@ -1,150 +1,327 @@
 """The paper's pilot mill and its case matrix (paper Tables 1-5; DESIGN.md section 3).
 
 :func:`pilot_mill` builds one case, :func:`paper_cases` the Table 4 x Table 5 matrix or part
-of it. Case names follow the paper: HD/LD (steel-like/ceramic-like particles), HS/MS/LS
-(80/71/62 % of critical), #1..#7 (load level), e.g. ``"LDMS#3"``.
+of it. Case names follow the paper (:func:`case_name`): HD/LD (steel-like/ceramic-like
+particles), HS/MS/LS (80/71/62 % of critical), #1..#7 (load level), e.g. ``"LDMS#3"``;
+``"balls-MS"`` for balls only; other speeds as a percentage, e.g. ``"LD-75%#2"``.
 
-Scales (:data:`SCALES` says what each changes):
+Scales (:data:`SCALES` says exactly what each changes):
 
 * ``"paper"``: the paper's mill as published.
-* ``"small"``: a thin axial slice with periodic ends and softer materials, for demos.
-* ``"soft"``: the paper's mill with every shear modulus x 0.001, for tests of whole-mill
-  behaviour (lifter harmonic, mean torque) at 1/32 of the steps.
+* ``"small"``: a 0.05 m axial slice with periodic ends, counts scaled to the slice, every
+  shear modulus x 0.01; for demos (3 simulated seconds of a level-1 case: about 35 s on 2
+  cores).
+* ``"tiny"``: the small slice with every shear modulus x 0.001; for unit tests.
+* ``"soft"``: the paper's whole mill with every shear modulus x 0.001; for tests of
+  whole-mill behaviour (lifter harmonic, mean torque).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from numbers import Integral, Real
+from types import MappingProxyType
+from typing import Any
 
-from .scene import Drum, Fraction, Lifters, Material, Pair, Scene
+from .scene import MAX_SPEED_FRACTION, Drum, Fraction, Lifters, Material, Pair, Scene
 
-__all__ = ["PAPER_SPEEDS", "SCALES", "paper_cases", "pilot_mill"]
+__all__ = [
+    "BALL_COUNT",
+    "BALL_DIAMETER",
+    "LOAD_LEVELS",
+    "PAPER_SPEEDS",
+    "PARTICLES_PER_LEVEL",
+    "PARTICLE_DIAMETER",
+    "SCALES",
+    "case_name",
+    "paper_cases",
+    "pilot_mill",
+]
 
 # Table 1: the mill
-DRUM_DIAMETER = 0.880  # m
-DRUM_LENGTH = 0.315  # m
+DRUM_DIAMETER = 0.880  # m, inner
+DRUM_LENGTH = 0.315  # m, inner
 LIFTER_COUNT = 16
 LIFTER_WIDTH = 0.030  # m
 LIFTER_HEIGHT = 0.020  # m
 BALL_COUNT = 2466
-BALL_DIAMETER = 0.025  # m: gives the 19.3 % ball filling at a bed porosity of about 0.45
-PARTICLE_DIAMETER = 0.012  # m: not in the paper, an assumption (DESIGN.md section 3)
-PARTICLES_PER_LEVEL = 4062  # Table 5: level #k has k x 4062 particles
-LOAD_LEVELS = range(1, 8)
-PAPER_SPEEDS = {0.80: "HS", 0.71: "MS", 0.62: "LS"}  # Table 4
+BALL_DIAMETER = 0.025  # m: not in the paper; gives the 19.3 % ball filling at porosity 0.45
+PARTICLE_DIAMETER = 0.012  # m: not in the paper; gives Table 5's 40 % particle filling per level
+PARTICLES_PER_LEVEL = 4062  # Table 5: load level #k has k x 4062 particles
+LOAD_LEVELS = range(1, 8)  # Table 5: #1..#7
+PAPER_SPEEDS: Mapping[float, str] = MappingProxyType({0.80: "HS", 0.71: "MS", 0.62: "LS"})
 
-# Table 2: materials; Table 3: restitution and friction
+# Table 2: materials; Table 3: (restitution, friction)
 STEEL = Material("steel", density=7860.0, shear_modulus=81e9, poisson=0.3)
 CERAMIC = Material("ceramic", density=2800.0, shear_modulus=1.6e9, poisson=0.22)
+STEEL_PARTICLE = "steel_particle"  # steel-like (HD) particles: steel's properties, own name
 STEEL_STEEL = (0.5, 0.15)
 CERAMIC_CERAMIC = (0.3, 0.66)
 CERAMIC_STEEL = (0.2, 0.4)
-PARTICLE_KINDS = {"ceramic": "LD", "steel": "HD"}
+PARTICLE_KINDS: Mapping[str, str] = MappingProxyType({"ceramic": "LD", "steel": "HD"})
 
 # Reduced scales
-SMALL_LENGTH = 0.05  # m: two ball diameters, periodic
-SMALL_STIFFNESS = 0.01  # shear moduli x this
-SOFT_STIFFNESS = 0.001
-
-SCALES: dict[str, str] = {
-    "paper": (
-        "The paper's pilot mill: drum 0.880 m x 0.315 m with flat steel end walls, 16 lifters "
-        "30 x 20 mm, 2466 steel balls of 25 mm, 4062 x level particles of 12 mm, the moduli of "
-        "Table 2 (steel G = 81 GPa, ceramic 1.6 GPa)."),
-    "small": (
-        f"A thin axial slice of the pilot mill, {SMALL_LENGTH} m long with periodic ends (no end "
-        f"walls); ball and particle counts scaled by {SMALL_LENGTH}/{DRUM_LENGTH} and rounded; "
-        f"every shear modulus x {SMALL_STIFFNESS} (Rayleigh time and default dt x 10, overlaps "
-        "a few % of the radius). Same diameters, speeds, restitution and friction."),
-    "soft": (
-        f"The paper's mill and charge unchanged except every shear modulus x {SOFT_STIFFNESS} "
-        "(steel 81 MPa; Rayleigh time and default dt x 31.6): for tests of the whole mill. "
-        "Overlaps reach several % of the radius; the balls-only mean torque stays within a few "
-        "% of the paper-scale value."),
-}
+SMALL_LENGTH = 0.05  # m: an axial slice two ball diameters long, periodic ends
+SMALL_STIFFNESS = 0.01  # "small": every shear modulus x this (Rayleigh time x 10)
+TINY_STIFFNESS = 0.001  # "tiny": every shear modulus x this (Rayleigh time x 31.6)
+SOFT_STIFFNESS = 0.001  # "soft": every shear modulus x this
 
 
-def _scale_numbers(scale: str) -> tuple[float, bool, float]:
-    """(drum length m, end walls, shear-modulus factor) of a scale."""
-    if scale == "paper":
-        return DRUM_LENGTH, True, 1.0
-    if scale == "small":
-        return SMALL_LENGTH, False, SMALL_STIFFNESS
-    if scale == "soft":
-        return DRUM_LENGTH, True, SOFT_STIFFNESS
-    raise ValueError(f"scale = {scale!r} is not valid; it must be one of {sorted(SCALES)}")
+@dataclass(frozen=True)
+class _Scale:
+    length: float  # m
+    end_walls: bool
+    stiffness: float  # factor on every shear modulus
 
 
-def case_name(particles: str | None, speed_fraction: float, load_level: int) -> str:
-    """The paper's code of a case: "HDMS#3", "LDLS#7"; "balls-MS" without particles; speeds
-    off the paper's three as a percentage ("LD-75%#2")."""
-    speed = PAPER_SPEEDS.get(round(speed_fraction, 6))
-    if particles is None:
-        return f"balls-{speed}" if speed else f"balls-{speed_fraction * 100:g}%"
-    kind = PARTICLE_KINDS[particles]
-    return f"{kind}{speed}#{load_level}" if speed else \
-        f"{kind}-{speed_fraction * 100:g}%#{load_level}"
+_SCALES = MappingProxyType(
+    {
+        "paper": _Scale(DRUM_LENGTH, True, 1.0),
+        "small": _Scale(SMALL_LENGTH, False, SMALL_STIFFNESS),
+        "tiny": _Scale(SMALL_LENGTH, False, TINY_STIFFNESS),
+        "soft": _Scale(DRUM_LENGTH, True, SOFT_STIFFNESS),
+    }
+)
+_SLICE_COUNTS = (
+    f"ball and particle counts scaled by {SMALL_LENGTH}/{DRUM_LENGTH} and rounded to the "
+    f"nearest integer ({round(BALL_COUNT * SMALL_LENGTH / DRUM_LENGTH)} balls; "
+    f"round({PARTICLES_PER_LEVEL} x level x {SMALL_LENGTH}/{DRUM_LENGTH}) particles)"
+)
+
+SCALES: Mapping[str, str] = MappingProxyType(
+    {
+        "paper": (
+            f"The paper's pilot mill (Tables 1-5): drum {DRUM_DIAMETER} m x {DRUM_LENGTH} m, "
+            f"steel, flat end walls, {LIFTER_COUNT} rectangular lifters "
+            f"{LIFTER_WIDTH * 1e3:g} mm wide x {LIFTER_HEIGHT * 1e3:g} mm high; {BALL_COUNT} "
+            f"steel balls of {BALL_DIAMETER * 1e3:g} mm; {PARTICLES_PER_LEVEL} x level "
+            f"particles of {PARTICLE_DIAMETER * 1e3:g} mm; the moduli of Table 2 (steel "
+            f"G = 81 GPa, ceramic 1.6 GPa)."
+        ),
+        "small": (
+            f"A thin axial slice of the pilot mill, {SMALL_LENGTH} m long with periodic ends "
+            f"(no end walls); {_SLICE_COUNTS}; every shear modulus x {SMALL_STIFFNESS} "
+            f"(Rayleigh time and default dt x {1 / math.sqrt(SMALL_STIFFNESS):.3g}). Drum "
+            "diameter, lifters, sphere diameters, densities, Poisson ratios, restitution, "
+            "friction and speeds as at paper scale. For demos: 3 simulated seconds, filling "
+            "and settling included, took about 35 s on 2 cores at load level 1 and about "
+            "3.5 min at level 7."
+        ),
+        "tiny": (
+            f"The small slice ({SMALL_LENGTH} m, periodic ends, {_SLICE_COUNTS}) with every "
+            f"shear modulus x {TINY_STIFFNESS} (Rayleigh time and default dt "
+            f"x {1 / math.sqrt(TINY_STIFFNESS):.3g}); everything else as at paper scale. For "
+            "unit tests: overlaps reach several % of the radius; 3 simulated seconds took "
+            "about 20 s on 2 cores at load level 1."
+        ),
+        "soft": (
+            f"The paper's whole mill and charge unchanged except every shear modulus "
+            f"x {SOFT_STIFFNESS} (steel 81 MPa; Rayleigh time and default dt "
+            f"x {1 / math.sqrt(SOFT_STIFFNESS):.3g}): for tests of whole-mill behaviour. "
+            "Overlaps reach several % of the radius; the balls-only mean torque stays within "
+            "a few % of the paper-scale value."
+        ),
+    }
+)
 
 
-def pilot_mill(speed_fraction: float = 0.71, particles: str | None = None, load_level: int = 1,
-               scale: str = "paper", *, particle_diameter: float = PARTICLE_DIAMETER,
-               ball_diameter: float = BALL_DIAMETER) -> Scene:
-    """One case of the paper's pilot mill.
+def _speed(value: object, where: str) -> float:
+    if (
+        not isinstance(value, Real)
+        or isinstance(value, bool)
+        or not 0.0 < float(value) <= MAX_SPEED_FRACTION
+    ):
+        raise ValueError(
+            f"{where} = {value!r} is not valid; it must be a number in "
+            f"(0, {MAX_SPEED_FRACTION:g}] (a fraction of the critical speed; the paper's are "
+            "0.62, 0.71, 0.80)"
+        )
+    return float(value)
+
+
+def _particles(value: object, where: str) -> str | None:
+    if value is not None and (not isinstance(value, str) or value not in PARTICLE_KINDS):
+        raise ValueError(
+            f"{where} = {value!r} is not valid; it must be one of "
+            f"{', '.join(repr(k) for k in PARTICLE_KINDS)} or None (balls only)"
+        )
+    return value
+
+
+def _level(value: object, where: str) -> int:
+    if not isinstance(value, Integral) or isinstance(value, bool) or value not in LOAD_LEVELS:
+        raise ValueError(
+            f"{where} = {value!r} is not valid; it must be an integer in 1..7 (paper Table 5)"
+        )
+    return int(value)
+
+
+def case_name(particles: str | None, speed_fraction: float, load_level: int = 1) -> str:
+    """The paper's code of a case (Table 4).
+
+    Parameters
+    ----------
+    particles : {"ceramic", "steel"} or None
+        LD (ceramic-like) or HD (steel-like) particles, or None for balls only.
+    speed_fraction : float
+        Fraction of critical speed: 0.80, 0.71, 0.62 give HS, MS, LS; others a percentage.
+    load_level : int
+        Table 5's level 1..7; not part of the name for balls only.
+
+    Returns
+    -------
+    str
+        E.g. ``"HDMS#3"``, ``"LDLS#7"``, ``"balls-MS"``, ``"LD-75%#2"``, ``"balls-75%"``.
+    """
+    kind = _particles(particles, "case_name particles")
+    speed = _speed(speed_fraction, "case_name speed_fraction")
+    level = _level(load_level, "case_name load_level")
+    code = PAPER_SPEEDS.get(round(speed, 6))
+    if kind is None:
+        return f"balls-{code}" if code else f"balls-{speed * 100:g}%"
+    prefix = PARTICLE_KINDS[kind]
+    return f"{prefix}{code}#{level}" if code else f"{prefix}-{speed * 100:g}%#{level}"
+
+
+def pilot_mill(
+    speed_fraction: float = 0.71,
+    particles: str | None = None,
+    load_level: int = 1,
+    scale: str = "paper",
+    *,
+    particle_diameter: float = PARTICLE_DIAMETER,
+    ball_diameter: float = BALL_DIAMETER,
+) -> Scene:
+    """One case of the paper's pilot mill, named with its code (:func:`case_name`).
+
+    Drum 0.880 m x 0.315 m of steel with flat end walls and 16 rectangular lifters 30 mm wide
+    x 20 mm high (phase 0); 2466 steel balls of 25 mm (fraction "balls"); optionally
+    4062 x ``load_level`` particles of 12 mm (fraction "particles"). Materials "steel"
+    (7860 kg/m^3, G 81 GPa, nu 0.3), "ceramic" (2800 kg/m^3, G 1.6 GPa, nu 0.22) and, for
+    steel-like particles, "steel_particle" with steel's properties. Pairs (e, mu):
+    steel-steel 0.5, 0.15; ceramic-ceramic 0.3, 0.66; ceramic-steel 0.2, 0.4; steel_particle
+    with itself and with steel as steel-steel.
 
     Parameters
     ----------
     speed_fraction : float
-        Rotation speed as a fraction of critical, in (0, 3]; the paper's are 0.62, 0.71, 0.80.
+        Rotation speed as a fraction of critical (ball convention), in (0, 3]; the paper's
+        are 0.62, 0.71, 0.80.
     particles : {"ceramic", "steel"} or None
         Ceramic-like (LD) or steel-like (HD) particles to grind, or None for balls only.
     load_level : int
-        Table 5's level #1..#7 (4062 x level particles at paper scale); only with particles.
-    scale : {"paper", "small", "soft"}
-        See :data:`SCALES`.
+        Table 5's level 1..7; with ``particles=None`` it must stay 1.
+    scale : {"paper", "small", "tiny", "soft"}
+        ``"paper"``: as above. ``"small"``: a 0.05 m slice with periodic ends, counts x
+        0.05/0.315 rounded (391 balls; 645 particles per level at level 1), every shear
+        modulus x 0.01. ``"tiny"``: the small slice with every shear modulus x 0.001.
+        ``"soft"``: the paper's mill with every shear modulus x 0.001. :data:`SCALES` has
+        the full descriptions.
     particle_diameter, ball_diameter : float
-        m; 12 mm and 25 mm by default.
-    """
-    length, end_walls, stiffness = _scale_numbers(scale)
-    if particles is not None and particles not in PARTICLE_KINDS:
-        raise ValueError(f"particles = {particles!r} is not valid; it must be one of "
-                         f"{sorted(PARTICLE_KINDS)} or None (balls only)")
-    if isinstance(load_level, bool) or not isinstance(load_level, int) or \
-            load_level not in LOAD_LEVELS:
-        raise ValueError(f"load_level = {load_level!r} is not valid; it must be an integer in "
-                         "1..7 (paper Table 5)")
-    if particles is None and load_level != 1:
-        raise ValueError(f"load_level = {load_level} is not valid without particles; leave it "
-                         "at 1 or choose particles='ceramic' or 'steel'")
-    share = length / DRUM_LENGTH
+        Sphere diameters, m: 12 mm and 25 mm by default (neither is given in the paper).
 
-    steel = STEEL.with_shear_modulus(stiffness) if stiffness != 1.0 else STEEL
+    Returns
+    -------
+    Scene
+    """
+    if not isinstance(scale, str) or scale not in _SCALES:
+        raise ValueError(
+            f"scale = {scale!r} is not valid; it must be one of "
+            f"{', '.join(repr(k) for k in _SCALES)}"
+        )
+    kind = _particles(particles, "particles")
+    level = _level(load_level, "load_level")
+    if kind is None and level != 1:
+        raise ValueError(
+            f"load_level = {level} is not valid without particles; leave it at 1 or choose "
+            "particles='ceramic' or 'steel'"
+        )
+    speed = _speed(speed_fraction, "speed_fraction")
+    sc = _SCALES[scale]
+    share = sc.length / DRUM_LENGTH
+
+    steel = STEEL.with_shear_modulus(sc.stiffness)
     materials = [steel]
     pairs = [Pair("steel", "steel", *STEEL_STEEL)]
     charge = [Fraction("steel", ball_diameter, round(BALL_COUNT * share), "balls")]
-    if particles is not None:
-        if particles == "ceramic":
-            mat = CERAMIC.with_shear_modulus(stiffness) if stiffness != 1.0 else CERAMIC
-            pairs += [Pair("ceramic", "ceramic", *CERAMIC_CERAMIC),
-                      Pair("ceramic", "steel", *CERAMIC_STEEL)]
-        else:  # steel-like particles: steel's properties, a material of their own
-            mat = Material("steel_particle", steel.density, steel.shear_modulus, steel.poisson)
-            pairs += [Pair("steel_particle", "steel_particle", *STEEL_STEEL),
-                      Pair("steel_particle", "steel", *STEEL_STEEL)]
+    if kind is not None:
+        if kind == "ceramic":
+            mat = CERAMIC.with_shear_modulus(sc.stiffness)
+            pairs += [
+                Pair("ceramic", "ceramic", *CERAMIC_CERAMIC),
+                Pair("ceramic", "steel", *CERAMIC_STEEL),
+            ]
+        else:
+            mat = Material(STEEL_PARTICLE, steel.density, steel.shear_modulus, steel.poisson)
+            pairs += [
+                Pair(STEEL_PARTICLE, STEEL_PARTICLE, *STEEL_STEEL),
+                Pair(STEEL_PARTICLE, "steel", *STEEL_STEEL),
+            ]
         materials.append(mat)
-        charge.append(Fraction(mat.name, particle_diameter,
-                               round(PARTICLES_PER_LEVEL * load_level * share), "particles"))
-    drum = Drum(DRUM_DIAMETER, length, "steel", end_walls,
-                Lifters(LIFTER_COUNT, LIFTER_WIDTH, LIFTER_HEIGHT))
-    return Scene(drum=drum, charge=tuple(charge), materials=tuple(materials), pairs=tuple(pairs),
-                 speed_fraction=speed_fraction,
-                 name=case_name(particles, speed_fraction, load_level))
+        count = round(PARTICLES_PER_LEVEL * level * share)
+        charge.append(Fraction(mat.name, particle_diameter, count, "particles"))
+    drum = Drum(
+        DRUM_DIAMETER,
+        sc.length,
+        "steel",
+        end_walls=sc.end_walls,
+        lifters=Lifters(LIFTER_COUNT, LIFTER_WIDTH, LIFTER_HEIGHT),
+    )
+    return Scene(
+        drum=drum,
+        charge=tuple(charge),
+        materials=tuple(materials),
+        pairs=tuple(pairs),
+        speed_fraction=speed,
+        name=case_name(kind, speed, level),
+    )
 
 
-def paper_cases(particles: Sequence[str] = ("ceramic", "steel"),
-                speed_fractions: Iterable[float] = (0.80, 0.71, 0.62),
-                load_levels: Iterable[int] = LOAD_LEVELS, scale: str = "paper") -> list[Scene]:
-    """The Table 4 x Table 5 matrix (42 cases), or the part asked for, in that order."""
-    if isinstance(particles, str):
-        particles = (particles,)
-    speeds, levels = list(speed_fractions), list(load_levels)
-    return [pilot_mill(s, p, level, scale) for p in particles for s in speeds for level in levels]
+def paper_cases(
+    particles: str | None | Iterable[str | None] = ("ceramic", "steel"),
+    speed_fractions: float | Iterable[float] = (0.80, 0.71, 0.62),
+    load_levels: int | Iterable[int] = LOAD_LEVELS,
+    scale: str = "paper",
+) -> list[Scene]:
+    """The Table 4 x Table 5 matrix (2 x 3 x 7 = 42 cases), or the part asked for.
+
+    Parameters
+    ----------
+    particles : str, None or iterable of them
+        "ceramic" (LD), "steel" (HD), None (balls only: one case per speed, whatever the
+        load levels).
+    speed_fractions : float or iterable of float
+        Fractions of critical speed.
+    load_levels : int or iterable of int
+        Table 5's levels, 1..7.
+    scale : str
+        See :data:`SCALES`.
+
+    Returns
+    -------
+    list of Scene
+        Ordered by particles, then speed, then load level, as given.
+    """
+    kinds = _as_list(particles, "particles", (str, type(None)))
+    speeds = _as_list(speed_fractions, "speed_fractions", (Real,))
+    levels = _as_list(load_levels, "load_levels", (Integral,))
+    out = []
+    for kind in kinds:
+        for speed in speeds:
+            if kind is None:
+                out.append(pilot_mill(speed, None, 1, scale))
+            else:
+                out.extend(pilot_mill(speed, kind, level, scale) for level in levels)
+    return out
+
+
+def _as_list(value: object, where: str, single: tuple[type, ...]) -> list[Any]:
+    items = [value] if isinstance(value, single) else value
+    if not isinstance(items, Iterable):
+        raise ValueError(f"paper_cases {where} = {value!r} is not valid; it must be an iterable")
+    out = list(items)
+    if not out:
+        raise ValueError(f"paper_cases {where} = {value!r} is not valid; it must not be empty")
+    return out

@@ -2,70 +2,128 @@
 
 A :class:`Scene` is a drum (:class:`Drum`, with optional :class:`Lifters`), a charge (one
 :class:`Fraction` per size class), the materials (:class:`Material`) and one :class:`Pair`
-(restitution, friction) for every pair of materials present, plus the rotation speed.
+(restitution, friction) for every pair of materials in use, plus the rotation speed.
 Everything is SI (m, kg, Pa, s, rad/s, Hz). Every class checks its fields on construction and
-raises ``ValueError`` naming the class, the field, the value and the valid range.
+raises ``ValueError`` naming the class, the field, the value and the valid range, e.g.
+``Fraction.diameter = -0.01 m is not valid; it must be > 0``. Numbers may be given as Python
+or numpy ints and floats and are stored as ``float``; bools, NaN and infinities are refused.
 
-Scenes round-trip through plain dicts (:meth:`Scene.to_dict`, :meth:`Scene.from_dict`), which
-is how records and checkpoints carry them.
+Scenes round-trip through plain JSON-able dicts (:meth:`Scene.to_dict`,
+:meth:`Scene.from_dict`), which is how records and checkpoints carry them.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Drum", "Fraction", "Lifters", "Material", "Pair", "Scene"]
+from .contact import rayleigh_time
 
-SCENE_FORMAT = "millscope-scene-1"
-RANDOM_CLOSE_PACKING = 0.64  # largest solid fraction a random bed of spheres reaches
+__all__ = [
+    "CRITICAL_SPEED_CONVENTIONS",
+    "LIFTER_PROFILES",
+    "MAX_SPEED_FRACTION",
+    "RANDOM_CLOSE_PACKING",
+    "SCENE_FORMAT",
+    "Drum",
+    "Fraction",
+    "Lifters",
+    "Material",
+    "Pair",
+    "Scene",
+]
+
+SCENE_FORMAT = "millscope-scene-1"  # the "format" key of Scene.to_dict
+RANDOM_CLOSE_PACKING = 0.64  # the largest solid fraction a random bed of spheres reaches
+MAX_SPEED_FRACTION = 3.0  # speed_fraction in (0, 3]
 CRITICAL_SPEED_CONVENTIONS = ("ball", "drum")
 LIFTER_PROFILES = ("rectangular", "trapezoidal")
 
 
-def _fail(owner: str, name: str, value: object, unit: str, valid: str) -> ValueError:
-    unit = f" {unit}" if unit else ""
-    return ValueError(f"{owner}.{name} = {value!r}{unit} is not valid; it must be {valid}")
+# -- validation helpers ------------------------------------------------------------------------
 
 
-def _number(owner: str, name: str, value: object, unit: str = "") -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise _fail(owner, name, value, unit, "a real number")
-    x = float(value)
-    if not math.isfinite(x):
-        raise _fail(owner, name, value, unit, "finite")
-    return x
+def _is_real(value: object) -> bool:
+    return isinstance(value, Real) and not isinstance(value, (bool, np.bool_))
 
 
-def _positive(owner: str, name: str, value: object, unit: str = "") -> float:
-    x = _number(owner, name, value, unit)
+def _show(value: object) -> str:
+    """A value as error messages print it: numbers plainly (no ``np.float64(...)``)."""
+    if isinstance(value, Integral) and not isinstance(value, (bool, np.bool_)):
+        return repr(int(value))
+    if _is_real(value):
+        return repr(float(value))  # type: ignore[arg-type]
+    return repr(value)
+
+
+def _fail(where: str, value: object, valid: str, unit: str = "") -> ValueError:
+    """``ValueError("<where> = <value> [unit] is not valid; it must be <valid>")``."""
+    unit = f" {unit}" if unit and _is_real(value) else ""
+    return ValueError(f"{where} = {_show(value)}{unit} is not valid; it must be {valid}")
+
+
+def _real(where: str, value: object, unit: str, valid: str) -> float:
+    """A finite real number as float; ``valid`` is the range the caller goes on to check."""
+    if not _is_real(value) or not math.isfinite(float(value)):  # type: ignore[arg-type]
+        raise _fail(where, value, f"a finite number {valid}".rstrip(), unit)
+    return float(value)  # type: ignore[arg-type]
+
+
+def _positive(where: str, value: object, unit: str = "") -> float:
+    x = _real(where, value, unit, "> 0")
     if not x > 0.0:
-        raise _fail(owner, name, value, unit, "> 0")
+        raise _fail(where, value, "> 0", unit)
     return x
 
 
-def _count(owner: str, name: str, value: object, least: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise _fail(owner, name, value, "", f"an integer >= {least}")
-    if value < least:
-        raise _fail(owner, name, value, "", f"an integer >= {least}")
+def _count(where: str, value: object) -> int:
+    if not isinstance(value, Integral) or isinstance(value, (bool, np.bool_)) or value < 1:
+        raise _fail(where, value, "an integer >= 1")
     return int(value)
 
 
-def _name(owner: str, name: str, value: object) -> str:
-    if not isinstance(value, str) or not value:
-        raise _fail(owner, name, value, "", "a non-empty string")
+def _flag(where: str, value: object) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise _fail(where, value, "True or False")
+    return bool(value)
+
+
+def _text(where: str, value: object, *, empty: bool = False) -> str:
+    if not isinstance(value, str) or (not empty and not value):
+        raise _fail(where, value, "a string" if empty else "a non-empty string")
     return value
 
 
+def _choice(where: str, value: object, choices: tuple[str, ...]) -> str:
+    if not isinstance(value, str) or value not in choices:
+        raise _fail(where, value, f"one of {', '.join(repr(c) for c in choices)}")
+    return value
+
+
+def _tuple_of(where: str, value: object, kind: type, what: str) -> tuple[Any, ...]:
+    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
+        raise _fail(where, value, f"a sequence of {what}")
+    items = tuple(value)
+    for k, item in enumerate(items):
+        if not isinstance(item, kind):
+            raise _fail(f"{where}[{k}]", item, f"a {kind.__name__}")
+    return items
+
+
 def _set(obj: object, **values: object) -> None:
+    """Store coerced values on a frozen dataclass (from ``__post_init__`` only)."""
     for k, v in values.items():
         object.__setattr__(obj, k, v)
+
+
+# -- the parts ---------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -75,9 +133,9 @@ class Material:
     Attributes
     ----------
     name : str
-        Unique within a scene.
+        Non-empty, unique within a scene.
     density : float
-        kg/m^3, > 0.
+        rho, kg/m^3, > 0.
     shear_modulus : float
         G, Pa, > 0.
     poisson : float
@@ -90,24 +148,27 @@ class Material:
     poisson: float
 
     def __post_init__(self) -> None:
-        o = "Material"
-        _set(self, name=_name(o, "name", self.name),
-             density=_positive(o, "density", self.density, "kg/m^3"),
-             shear_modulus=_positive(o, "shear_modulus", self.shear_modulus, "Pa"))
-        nu = _number(o, "poisson", self.poisson)
+        name = _text("Material.name", self.name)
+        density = _positive("Material.density", self.density, "kg/m^3")
+        shear_modulus = _positive("Material.shear_modulus", self.shear_modulus, "Pa")
+        nu = _real("Material.poisson", self.poisson, "", "in (-1, 0.5)")
         if not -1.0 < nu < 0.5:
-            raise _fail(o, "poisson", self.poisson, "", "in (-1, 0.5)")
-        _set(self, poisson=nu)
+            raise _fail("Material.poisson", self.poisson, "in (-1, 0.5)")
+        _set(self, name=name, density=density, shear_modulus=shear_modulus, poisson=nu)
 
     @property
     def youngs_modulus(self) -> float:
-        """E = 2 G (1 + nu), Pa."""
+        """Young's modulus E = 2 G (1 + nu), Pa."""
         return 2.0 * self.shear_modulus * (1.0 + self.poisson)
 
     def with_shear_modulus(self, factor: float) -> Material:
-        """A copy with the shear modulus scaled by ``factor`` (> 0): reduced-stiffness scales."""
-        return replace(self, shear_modulus=self.shear_modulus
-                       * _positive("Material", "factor", factor))
+        """A copy with the shear modulus multiplied by ``factor`` (> 0).
+
+        Reduced-stiffness scales use it: G x 0.01 makes the Rayleigh time, and the default
+        time step, 10 times longer.
+        """
+        scale = _positive("Material.with_shear_modulus factor", factor)
+        return dataclasses.replace(self, shear_modulus=self.shear_modulus * scale)
 
 
 @dataclass(frozen=True)
@@ -117,7 +178,7 @@ class Pair:
     Attributes
     ----------
     a, b : str
-        Material names.
+        Material names; the pair is unordered.
     restitution : float
         Coefficient of restitution e, in (0, 1].
     friction : float
@@ -130,23 +191,29 @@ class Pair:
     friction: float
 
     def __post_init__(self) -> None:
-        o = "Pair"
-        e = _number(o, "restitution", self.restitution)
+        a, b = _text("Pair.a", self.a), _text("Pair.b", self.b)
+        e = _real("Pair.restitution", self.restitution, "", "in (0, 1]")
         if not 0.0 < e <= 1.0:
-            raise _fail(o, "restitution", self.restitution, "", "in (0, 1]")
-        mu = _number(o, "friction", self.friction)
+            raise _fail("Pair.restitution", self.restitution, "in (0, 1]")
+        mu = _real("Pair.friction", self.friction, "", ">= 0")
         if mu < 0.0:
-            raise _fail(o, "friction", self.friction, "", ">= 0")
-        _set(self, a=_name(o, "a", self.a), b=_name(o, "b", self.b), restitution=e, friction=mu)
+            raise _fail("Pair.friction", self.friction, ">= 0")
+        _set(self, a=a, b=b, restitution=e, friction=mu)
 
     @property
     def key(self) -> frozenset[str]:
+        """The unordered pair of material names."""
         return frozenset((self.a, self.b))
+
+    @property
+    def label(self) -> str:
+        """``"a-b"``, the names in alphabetical order."""
+        return "-".join(sorted((self.a, self.b)))
 
 
 @dataclass(frozen=True)
 class Lifters:
-    """Lifter bars along the full drum length, evenly spaced.
+    """Lifter bars along the full drum length, evenly spaced around the shell.
 
     Attributes
     ----------
@@ -155,13 +222,14 @@ class Lifters:
     width : float
         Width at the shell (the base), m, > 0.
     height : float
-        Radial height, m, > 0.
+        Radial height, m, > 0 (below the drum radius: checked by :class:`Drum`).
     profile : {"rectangular", "trapezoidal"}
         Cross-section shape.
     top_width : float or None
-        Width at the tip (towards the axis), m, in (0, width]; only for trapezoidal lifters.
+        Width at the tip (towards the axis), m: None for rectangular lifters, in (0, width]
+        and required for trapezoidal ones.
     phase : float
-        Angle of lifter 0 when the drum angle is 0, rad.
+        Angle of lifter 0 when the drum angle is 0, rad (any finite value).
     """
 
     count: int
@@ -172,25 +240,35 @@ class Lifters:
     phase: float = 0.0
 
     def __post_init__(self) -> None:
-        o = "Lifters"
-        _set(self, count=_count(o, "count", self.count),
-             width=_positive(o, "width", self.width, "m"),
-             height=_positive(o, "height", self.height, "m"),
-             phase=_number(o, "phase", self.phase, "rad"))
-        if self.profile not in LIFTER_PROFILES:
-            raise _fail(o, "profile", self.profile, "", f"one of {LIFTER_PROFILES}")
-        if self.profile == "rectangular":
+        count = _count("Lifters.count", self.count)
+        width = _positive("Lifters.width", self.width, "m")
+        height = _positive("Lifters.height", self.height, "m")
+        profile = _choice("Lifters.profile", self.profile, LIFTER_PROFILES)
+        top_width: float | None = None
+        if profile == "rectangular":
             if self.top_width is not None:
-                raise _fail(o, "top_width", self.top_width, "m",
-                            "None for rectangular lifters (their tip is as wide as the base)")
+                raise _fail(
+                    "Lifters.top_width",
+                    self.top_width,
+                    "None for rectangular lifters (their tip is as wide as their base)",
+                    "m",
+                )
         else:
+            valid = f"in (0, width = {width:g} m] for trapezoidal lifters"
             if self.top_width is None:
-                raise _fail(o, "top_width", None, "m", "given for trapezoidal lifters")
-            tw = _positive(o, "top_width", self.top_width, "m")
-            if tw > self.width:
-                raise _fail(o, "top_width", self.top_width, "m",
-                            f"<= width = {self.width} m")
-            _set(self, top_width=tw)
+                raise _fail("Lifters.top_width", None, valid)
+            top_width = _real("Lifters.top_width", self.top_width, "m", valid)
+            if not 0.0 < top_width <= width:
+                raise _fail("Lifters.top_width", self.top_width, valid, "m")
+        _set(
+            self,
+            count=count,
+            width=width,
+            height=height,
+            profile=profile,
+            top_width=top_width,
+            phase=_real("Lifters.phase", self.phase, "rad", ""),
+        )
 
     @property
     def tip_width(self) -> float:
@@ -199,7 +277,7 @@ class Lifters:
 
     @property
     def cross_section(self) -> float:
-        """Cross-section area, m^2."""
+        """Cross-section area of one lifter, (width + tip width) / 2 x height, m^2."""
         return 0.5 * (self.width + self.tip_width) * self.height
 
 
@@ -210,15 +288,16 @@ class Drum:
     Attributes
     ----------
     diameter : float
-        Inner diameter, m, > 0.
+        Inner diameter D, m, > 0.
     length : float
-        Inner length, m, > 0 (the period along the axis when ``end_walls`` is False).
+        Inner length L, m, > 0 (the period along the axis when ``end_walls`` is False).
     material : str
         Name of the drum's material (shell, lifters and end walls).
     end_walls : bool
-        Flat end walls at z = 0 and z = length; False for periodic ends (an axial slice).
+        Flat end walls at z = 0 and z = L; False for periodic ends (a thin axial slice).
     lifters : Lifters or None
-        Lifter bars, or None for a smooth shell.
+        Lifter bars, or None for a smooth shell. Their height must be below the radius and
+        they must fit around the circumference at their tips: count x width < 2 pi (R - height).
     """
 
     diameter: float
@@ -228,49 +307,74 @@ class Drum:
     lifters: Lifters | None = None
 
     def __post_init__(self) -> None:
-        o = "Drum"
-        _set(self, diameter=_positive(o, "diameter", self.diameter, "m"),
-             length=_positive(o, "length", self.length, "m"),
-             material=_name(o, "material", self.material))
-        if not isinstance(self.end_walls, bool):
-            raise _fail(o, "end_walls", self.end_walls, "", "True or False")
+        diameter = _positive("Drum.diameter", self.diameter, "m")
+        radius = 0.5 * diameter
         lift = self.lifters
         if lift is not None:
             if not isinstance(lift, Lifters):
-                raise _fail(o, "lifters", lift, "", "a Lifters or None")
-            if lift.height >= self.radius:
-                raise _fail(o, "lifters", lift.height, "m",
-                            f"lower than the drum radius {self.radius} m (Lifters.height)")
-            room = 2.0 * math.pi * (self.radius - lift.height)
+                raise _fail("Drum.lifters", lift, "a Lifters or None")
+            if lift.height >= radius:
+                raise _fail(
+                    "Drum.lifters.height", lift.height, f"< the drum radius {radius:g} m", "m"
+                )
+            room = 2.0 * math.pi * (radius - lift.height)
             if lift.count * lift.width >= room:
-                raise _fail(o, "lifters", f"{lift.count} x {lift.width} m", "",
-                            f"narrower in all than the circumference at their tips, {room:.4g} m")
+                raise ValueError(
+                    f"Drum.lifters.count x width = {lift.count} x {lift.width:g} m = "
+                    f"{lift.count * lift.width:.4g} m is not valid; it must be < "
+                    f"2 pi (R - height) = {room:.4g} m, the circumference at the lifter tips"
+                )
+        _set(
+            self,
+            diameter=diameter,
+            length=_positive("Drum.length", self.length, "m"),
+            material=_text("Drum.material", self.material),
+            end_walls=_flag("Drum.end_walls", self.end_walls),
+        )
 
     @property
     def radius(self) -> float:
-        """Inner radius, m."""
+        """Inner radius R = D / 2, m."""
         return 0.5 * self.diameter
 
     @property
     def volume(self) -> float:
-        """pi R^2 L, m^3 (lifters included)."""
+        """Inner volume pi R^2 L, m^3 (lifters not subtracted)."""
         return math.pi * self.radius**2 * self.length
 
     @property
     def lifter_volume(self) -> float:
-        """Volume of the lifters, m^3."""
+        """Volume of the lifters, count x cross-section x L, m^3 (0 without lifters)."""
         lift = self.lifters
         return 0.0 if lift is None else lift.count * lift.cross_section * self.length
 
     @property
     def free_volume(self) -> float:
-        """Volume inside the drum not taken by lifters, m^3."""
+        """Inner volume not taken by lifters, m^3."""
         return self.volume - self.lifter_volume
+
+    @property
+    def tip_radius(self) -> float:
+        """Distance from the axis to the lifter tips (R without lifters), m."""
+        return self.radius - (0.0 if self.lifters is None else self.lifters.height)
 
 
 @dataclass(frozen=True)
 class Fraction:
-    """One size class of the charge: ``count`` spheres of one ``diameter`` and ``material``."""
+    """One size class of the charge: ``count`` spheres of one ``diameter`` and ``material``.
+
+    Attributes
+    ----------
+    material : str
+        Name of the material.
+    diameter : float
+        Sphere diameter d, m, > 0.
+    count : int
+        Number of spheres, >= 1.
+    name : str
+        A label such as "balls" or "particles", unique within a scene; "" (the default)
+        stands for the material name.
+    """
 
     material: str
     diameter: float
@@ -278,46 +382,58 @@ class Fraction:
     name: str = ""
 
     def __post_init__(self) -> None:
-        o = "Fraction"
-        _set(self, material=_name(o, "material", self.material),
-             diameter=_positive(o, "diameter", self.diameter, "m"),
-             count=_count(o, "count", self.count))
-        if not isinstance(self.name, str):
-            raise _fail(o, "name", self.name, "", "a string")
-        if not self.name:
-            _set(self, name=self.material)
+        material = _text("Fraction.material", self.material)
+        _set(
+            self,
+            material=material,
+            diameter=_positive("Fraction.diameter", self.diameter, "m"),
+            count=_count("Fraction.count", self.count),
+            name=_text("Fraction.name", self.name, empty=True) or material,
+        )
 
     @property
     def radius(self) -> float:
+        """Sphere radius d / 2, m."""
         return 0.5 * self.diameter
 
     @property
     def volume(self) -> float:
-        """Solid volume of the whole fraction, m^3."""
+        """Solid volume of the whole fraction, count x pi d^3 / 6, m^3."""
         return self.count * math.pi * self.diameter**3 / 6.0
+
+
+# -- the scene ---------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
 class Scene:
-    """A mill and its charge.
+    """A mill, its charge and its speed.
 
     Attributes
     ----------
     drum : Drum
+        The drum; its material must be in ``materials``.
     charge : tuple of Fraction
-        At least one.
+        At least one fraction (any sequence is accepted and stored as a tuple); unique names,
+        materials in ``materials``. Every sphere must fit between the lifter tips and the axis
+        (d < R - lifter height) and along the drum (d < L with end walls; L >= 2 d with periodic
+        ends, so that a sphere meets at most one periodic image of another). The solid volume
+        must not exceed 0.64 (random close packing) x the drum's free volume.
     materials : tuple of Material
-        Every material the drum and the charge use (unique names).
+        Every material the drum and the charge use, unique names; unused ones are allowed.
     pairs : tuple of Pair
-        Exactly one per unordered pair of materials in use (like pairs included).
+        Exactly one Pair for every unordered pair of materials in use (drum included, like
+        pairs included); pairs involving unused materials are optional.
     speed_fraction : float or None
         Rotation speed as a fraction of the critical speed, in (0, 3].
     speed_hz : float or None
-        Rotation frequency, Hz, >= 0. Exactly one of ``speed_fraction`` and ``speed_hz``.
+        Rotation frequency, Hz, >= 0 (0: the drum at rest). Exactly one of ``speed_fraction``
+        and ``speed_hz`` is given.
     critical_speed_convention : {"ball", "drum"}
-        omega_c = sqrt(2 g / (D - d_max)) ("ball", DESIGN.md) or sqrt(2 g / D) ("drum").
+        omega_c = sqrt(2 g / (D - d_max)) ("ball", DESIGN.md section 2) or sqrt(2 g / D)
+        ("drum"), d_max the largest sphere diameter.
     gravity : float
-        m/s^2, > 0, acting along -y.
+        g, m/s^2, > 0, acting along -y.
     clamp_normal_force : bool
         Clamp the total normal force at zero (off by default, as in EDEM and LIGGGHTS).
     name : str
@@ -334,124 +450,165 @@ class Scene:
     gravity: float = 9.81
     clamp_normal_force: bool = False
     name: str = ""
-    _index: dict[str, int] = field(init=False, repr=False, compare=False)
+    _index: Mapping[str, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        o = "Scene"
         if not isinstance(self.drum, Drum):
-            raise _fail(o, "drum", self.drum, "", "a Drum")
-        charge = tuple(self.charge) if isinstance(self.charge, Sequence) else ()
-        if not charge or not all(isinstance(f, Fraction) for f in charge):
-            raise _fail(o, "charge", self.charge, "", "a non-empty sequence of Fraction")
-        materials = tuple(self.materials) if isinstance(self.materials, Sequence) else ()
-        if not materials or not all(isinstance(m, Material) for m in materials):
-            raise _fail(o, "materials", self.materials, "", "a non-empty sequence of Material")
-        pairs = tuple(self.pairs) if isinstance(self.pairs, Sequence) else ()
-        if not all(isinstance(p, Pair) for p in pairs):
-            raise _fail(o, "pairs", self.pairs, "", "a sequence of Pair")
+            raise _fail("Scene.drum", self.drum, "a Drum")
+        charge = _tuple_of("Scene.charge", self.charge, Fraction, "Fraction")
+        if not charge:
+            raise _fail("Scene.charge", self.charge, "a non-empty sequence of Fraction")
+        materials = _tuple_of("Scene.materials", self.materials, Material, "Material")
+        pairs = _tuple_of("Scene.pairs", self.pairs, Pair, "Pair")
         _set(self, charge=charge, materials=materials, pairs=pairs)
 
-        index: dict[str, int] = {}
-        for k, m in enumerate(materials):
-            if m.name in index:
-                raise _fail(o, "materials", m.name, "", "unique names (this one repeats)")
-            index[m.name] = k
+        index = _unique("Scene.materials", [m.name for m in materials], "material names")
         _set(self, _index=index)
-        for where, name in [("drum.material", self.drum.material)] + [
-                (f"charge[{k}].material", f.material) for k, f in enumerate(charge)]:
-            if name not in index:
-                raise _fail(o, where, name, "", f"one of the materials {sorted(index)}")
-        used = self.used_materials()
+        _unique(
+            "Scene.charge names",
+            [f.name for f in charge],
+            "fraction names (give each Fraction its own name=...)",
+        )
+        known = f"one of the materials {sorted(index)}"
+        if self.drum.material not in index:
+            raise _fail("Scene.drum.material", self.drum.material, known)
+        for k, f in enumerate(charge):
+            if f.material not in index:
+                raise _fail(f"Scene.charge[{k}].material", f.material, known)
+        self._check_pairs()
+        self._check_speed()
+        _set(
+            self,
+            critical_speed_convention=_choice(
+                "Scene.critical_speed_convention",
+                self.critical_speed_convention,
+                CRITICAL_SPEED_CONVENTIONS,
+            ),
+            gravity=_positive("Scene.gravity", self.gravity, "m/s^2"),
+            clamp_normal_force=_flag("Scene.clamp_normal_force", self.clamp_normal_force),
+            name=_text("Scene.name", self.name, empty=True),
+        )
+        self._check_room()
+
+    def _check_pairs(self) -> None:
+        labels = [p.label for p in self.pairs]
+        given = f"one Pair for every pair of materials in use; given: {labels}"
         seen: set[frozenset[str]] = set()
-        for p in pairs:
+        for p in self.pairs:
             for end in (p.a, p.b):
-                if end not in index:
-                    raise _fail(o, "pairs", f"{p.a}-{p.b}", "",
-                                f"between known materials {sorted(index)}")
+                if end not in self._index:
+                    raise _fail(
+                        f"Scene.pairs[{p.label!r}]",
+                        end,
+                        f"one of the materials {sorted(self._index)}",
+                    )
             if p.key in seen:
-                raise _fail(o, "pairs", f"{p.a}-{p.b}", "", "given once (this pair repeats)")
+                raise ValueError(
+                    f"Scene.pairs = {labels} is not valid; it must hold each pair of materials "
+                    f"once, and {p.label} repeats"
+                )
             seen.add(p.key)
+        used = self.used_materials()
         for i, a in enumerate(used):
             for b in used[i:]:
                 if frozenset((a, b)) not in seen:
-                    raise _fail(o, "pairs", f"missing {a}-{b}", "",
-                                "one Pair for every pair of materials in use")
+                    missing = "-".join(sorted((a, b)))
+                    raise ValueError(
+                        f"Scene.pairs is missing the pair {missing} (materials {a!r} and "
+                        f"{b!r}); it must hold {given}"
+                    )
 
+    def _check_speed(self) -> None:
         if (self.speed_fraction is None) == (self.speed_hz is None):
-            raise _fail(o, "speed_fraction", self.speed_fraction, "",
-                        "given, or speed_hz given, but not both")
+            raise ValueError(
+                f"Scene.speed_fraction = {_show(self.speed_fraction)} and Scene.speed_hz = "
+                f"{_show(self.speed_hz)} are not valid; exactly one of them must be given"
+            )
         if self.speed_fraction is not None:
-            s = _positive(o, "speed_fraction", self.speed_fraction)
-            if s > 3.0:
-                raise _fail(o, "speed_fraction", self.speed_fraction, "", "in (0, 3]")
+            valid = f"in (0, {MAX_SPEED_FRACTION:g}] (a fraction of the critical speed)"
+            s = _real("Scene.speed_fraction", self.speed_fraction, "", valid)
+            if not 0.0 < s <= MAX_SPEED_FRACTION:
+                raise _fail("Scene.speed_fraction", self.speed_fraction, valid)
             _set(self, speed_fraction=s)
         else:
-            hz = _number(o, "speed_hz", self.speed_hz, "Hz")
+            hz = _real("Scene.speed_hz", self.speed_hz, "Hz", ">= 0")
             if hz < 0.0:
-                raise _fail(o, "speed_hz", self.speed_hz, "Hz", ">= 0")
+                raise _fail("Scene.speed_hz", self.speed_hz, ">= 0", "Hz")
             _set(self, speed_hz=hz)
-        if self.critical_speed_convention not in CRITICAL_SPEED_CONVENTIONS:
-            raise _fail(o, "critical_speed_convention", self.critical_speed_convention, "",
-                        f"one of {CRITICAL_SPEED_CONVENTIONS}")
-        _set(self, gravity=_positive(o, "gravity", self.gravity, "m/s^2"))
-        if not isinstance(self.clamp_normal_force, bool):
-            raise _fail(o, "clamp_normal_force", self.clamp_normal_force, "", "True or False")
-        if not isinstance(self.name, str):
-            raise _fail(o, "name", self.name, "", "a string")
 
-        # Geometry: every particle fits between the lifter tips and the axis.
+    def _check_room(self) -> None:
         drum = self.drum
-        gap = drum.radius - (0.0 if drum.lifters is None else drum.lifters.height)
-        for f in charge:
+        gap = drum.tip_radius
+        for f in self.charge:
+            where = f"Scene.charge[{f.name!r}].diameter"
             if f.diameter >= gap:
-                raise _fail(o, f"charge[{f.name!r}].diameter", f.diameter, "m",
-                            f"< {gap:.4g} m, the gap between the lifter tips and the axis")
-            if not drum.end_walls and f.diameter > 0.5 * drum.length:
-                raise _fail(o, f"charge[{f.name!r}].diameter", f.diameter, "m",
-                            f"<= half the period {drum.length} m of a drum with periodic ends")
+                raise _fail(
+                    where,
+                    f.diameter,
+                    f"< {gap:.4g} m, the gap between the lifter tips and the axis",
+                    "m",
+                )
             if drum.end_walls and f.diameter >= drum.length:
-                raise _fail(o, f"charge[{f.name!r}].diameter", f.diameter, "m",
-                            f"< the drum length {drum.length} m")
+                raise _fail(where, f.diameter, f"< the drum length {drum.length:g} m", "m")
+            if not drum.end_walls and 2.0 * f.diameter > drum.length:
+                raise _fail(
+                    where,
+                    f.diameter,
+                    f"<= {0.5 * drum.length:.4g} m: a drum with periodic ends needs a length "
+                    f"of at least 2 x the largest diameter, and this one is {drum.length:g} m",
+                    "m",
+                )
         solid = self.charge_volume()
         room = RANDOM_CLOSE_PACKING * drum.free_volume
         if solid > room:
-            raise _fail(o, "charge", f"{solid:.4g} m^3 of solid", "",
-                        f"<= {room:.4g} m^3 ({RANDOM_CLOSE_PACKING} x the drum's free volume): "
-                        "more charge than the drum holds")
+            raise ValueError(
+                f"Scene.charge = {solid:.4g} m^3 of solid is not valid; it must be <= "
+                f"{room:.4g} m^3 ({RANDOM_CLOSE_PACKING} x the drum's free volume "
+                f"{drum.free_volume:.4g} m^3): more charge than the drum holds"
+            )
 
-    # -- materials and pairs -----------------------------------------------------------------
+    # -- materials and pairs -------------------------------------------------------------------
     def used_materials(self) -> list[str]:
-        """Names of the materials in use (drum first), each once."""
+        """Names of the materials in use (the drum's first, then the charge's), each once."""
         names = [self.drum.material] + [f.material for f in self.charge]
         return list(dict.fromkeys(names))
 
     def material(self, name: str) -> Material:
+        """The Material called ``name``; ValueError if the scene has none."""
         return self.materials[self.material_index(name)]
 
     def material_index(self, name: str) -> int:
-        """Index of material ``name`` in ``materials``."""
+        """Index of the material called ``name`` in ``materials``; ValueError if unknown."""
         try:
             return self._index[name]
-        except KeyError:
-            raise ValueError(f"material {name!r} is not in this scene; it has "
-                             f"{sorted(self._index)}") from None
+        except (KeyError, TypeError):
+            raise ValueError(
+                f"material {name!r} is not in this scene; it has {sorted(self._index)}"
+            ) from None
 
     def pair(self, a: str, b: str) -> Pair:
-        """The Pair of materials a and b (either order)."""
+        """The Pair of materials ``a`` and ``b`` (either order); ValueError if none."""
         key = frozenset((a, b))
         for p in self.pairs:
             if p.key == key:
                 return p
-        raise ValueError(f"no Pair for materials {a!r} and {b!r} in this scene")
+        raise ValueError(
+            f"no Pair for materials {a!r} and {b!r} in this scene; it has "
+            f"{[p.label for p in self.pairs]}"
+        )
 
     def pair_matrices(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Restitution and friction, each (n, n) symmetric in ``materials`` order.
+        """Restitution and friction matrices.
 
-        Pairs of materials not in use (no Pair needed) get e = 1, mu = 0; no contact uses them.
+        Returns
+        -------
+        restitution, friction : ndarray of float64, shape (n, n)
+            Symmetric, rows and columns in ``materials`` order. Pairs of materials that no
+            contact can involve (unused materials without a Pair) hold e = 1, mu = 0.
         """
         n = len(self.materials)
-        e = np.ones((n, n))
-        mu = np.zeros((n, n))
+        e = np.ones((n, n), dtype=np.float64)
+        mu = np.zeros((n, n), dtype=np.float64)
         for p in self.pairs:
             i, j = self._index[p.a], self._index[p.b]
             e[i, j] = e[j, i] = p.restitution
@@ -460,34 +617,40 @@ class Scene:
 
     @property
     def has_friction(self) -> bool:
-        return any(p.friction > 0.0 for p in self.pairs)
+        """True if any pair of materials in use has friction > 0."""
+        used = set(self.used_materials())
+        return any(p.friction > 0.0 and p.key <= used for p in self.pairs)
 
     @property
     def single_material(self) -> bool:
-        """The drum and the whole charge are of one material."""
+        """True if the drum and the whole charge are of one material."""
         return len(self.used_materials()) == 1
 
-    # -- charge ------------------------------------------------------------------------------
+    # -- charge --------------------------------------------------------------------------------
     @property
     def n_particles(self) -> int:
+        """Number of spheres in the charge."""
         return sum(f.count for f in self.charge)
 
     @property
     def max_diameter(self) -> float:
+        """Largest sphere diameter of the charge, m."""
         return max(f.diameter for f in self.charge)
 
     @property
     def min_diameter(self) -> float:
+        """Smallest sphere diameter of the charge, m."""
         return min(f.diameter for f in self.charge)
 
     def particle_radii(self) -> NDArray[np.float64]:
-        """(N,) radii, m, fractions in ``charge`` order."""
-        return np.concatenate([np.full(f.count, f.radius) for f in self.charge])
+        """Radii of all spheres, m, shape (N,), fractions concatenated in ``charge`` order."""
+        return np.concatenate([np.full(f.count, f.radius, dtype=np.float64) for f in self.charge])
 
     def particle_materials(self) -> NDArray[np.int32]:
-        """(N,) material indices into ``materials``, fractions in ``charge`` order."""
-        return np.concatenate([np.full(f.count, self._index[f.material], dtype=np.int32)
-                               for f in self.charge])
+        """Material index (into ``materials``) of every sphere, shape (N,), ``charge`` order."""
+        return np.concatenate(
+            [np.full(f.count, self._index[f.material], dtype=np.int32) for f in self.charge]
+        )
 
     def charge_volume(self) -> float:
         """Solid volume of the charge, m^3."""
@@ -498,15 +661,33 @@ class Scene:
         return sum(f.volume * self.material(f.material).density for f in self.charge)
 
     def bed_filling(self, porosity: float = 0.45) -> float:
-        """Fraction of the drum volume the charge takes at rest with bed ``porosity``."""
-        if not 0.0 <= porosity < 1.0:
-            raise ValueError(f"porosity = {porosity!r} is not valid; it must be in [0, 1)")
-        return self.charge_volume() / (1.0 - porosity) / self.drum.volume
+        """Fraction of the drum volume the charge takes as a bed at rest.
+
+        Parameters
+        ----------
+        porosity : float
+            Void fraction of the bed, in [0, 1).
+
+        Returns
+        -------
+        float
+            (solid volume / (1 - porosity)) / (pi R^2 L), dimensionless.
+        """
+        valid = "in [0, 1)"
+        phi = _real("Scene.bed_filling porosity", porosity, "", valid)
+        if not 0.0 <= phi < 1.0:
+            raise _fail("Scene.bed_filling porosity", porosity, valid)
+        return self.charge_volume() / (1.0 - phi) / self.drum.volume
 
     def rayleigh_times(self) -> list[tuple[str, float]]:
-        """(fraction name, Rayleigh time T_R = pi r sqrt(rho/G) / (0.1631 nu + 0.8766), s)."""
-        from .contact import rayleigh_time
+        """Rayleigh time of every fraction.
 
+        Returns
+        -------
+        list of (str, float)
+            (fraction name, T_R = pi r sqrt(rho / G) / (0.1631 nu + 0.8766) in s), in
+            ``charge`` order (:func:`millscope.contact.rayleigh_time`).
+        """
         out = []
         for f in self.charge:
             m = self.material(f.material)
@@ -514,97 +695,160 @@ class Scene:
         return out
 
     def min_rayleigh_time(self) -> tuple[float, str]:
-        """The smallest Rayleigh time of the charge, s, and the fraction that sets it."""
+        """The smallest Rayleigh time of the charge, s, and the name of the fraction that has
+        it (the first such fraction on a tie). The default time step is 0.2 x this."""
         name, t = min(self.rayleigh_times(), key=lambda item: item[1])
         return t, name
 
-    # -- speed -------------------------------------------------------------------------------
+    # -- speed ---------------------------------------------------------------------------------
     @property
     def critical_speed_rad_s(self) -> float:
-        """omega_c = sqrt(2 g / (D - d_max)) ("ball") or sqrt(2 g / D) ("drum"), rad/s."""
-        span = self.drum.diameter - (self.max_diameter
-                                     if self.critical_speed_convention == "ball" else 0.0)
+        """Critical speed omega_c, rad/s: sqrt(2 g / (D - d_max)) for the "ball" convention,
+        sqrt(2 g / D) for "drum"."""
+        span = self.drum.diameter
+        if self.critical_speed_convention == "ball":
+            span -= self.max_diameter
         return math.sqrt(2.0 * self.gravity / span)
 
     @property
     def omega(self) -> float:
-        """Rotation speed, rad/s (about +z)."""
+        """Rotation speed, rad/s (about +z): speed_fraction x omega_c, or 2 pi speed_hz."""
         if self.speed_fraction is not None:
             return self.speed_fraction * self.critical_speed_rad_s
-        return 2.0 * math.pi * float(self.speed_hz)  # type: ignore[arg-type]
+        assert self.speed_hz is not None  # one of the two is set (checked on construction)
+        return 2.0 * math.pi * self.speed_hz
 
     @property
     def rotation_hz(self) -> float:
-        """Rotation frequency, Hz."""
+        """Rotation frequency omega / (2 pi), Hz."""
         return self.omega / (2.0 * math.pi)
 
-    # -- dicts -------------------------------------------------------------------------------
+    # -- dicts ---------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """A plain, JSON-serialisable dict (see :meth:`from_dict`)."""
-        lift = self.drum.lifters
-        return {
-            "format": SCENE_FORMAT,
-            "name": self.name,
-            "drum": {"diameter": self.drum.diameter, "length": self.drum.length,
-                     "material": self.drum.material, "end_walls": self.drum.end_walls,
-                     "lifters": None if lift is None else {
-                         "count": lift.count, "width": lift.width, "height": lift.height,
-                         "profile": lift.profile, "top_width": lift.top_width,
-                         "phase": lift.phase}},
-            "charge": [{"material": f.material, "diameter": f.diameter, "count": f.count,
-                        "name": f.name} for f in self.charge],
-            "materials": [{"name": m.name, "density": m.density,
-                           "shear_modulus": m.shear_modulus, "poisson": m.poisson}
-                          for m in self.materials],
-            "pairs": [{"a": p.a, "b": p.b, "restitution": p.restitution,
-                       "friction": p.friction} for p in self.pairs],
-            "speed_fraction": self.speed_fraction,
-            "speed_hz": self.speed_hz,
-            "critical_speed_convention": self.critical_speed_convention,
-            "gravity": self.gravity,
-            "clamp_normal_force": self.clamp_normal_force,
-        }
+        """A plain, JSON-serialisable dict: ``{"format": "millscope-scene-1", ...}`` and one
+        key per field (nested dicts for the drum and lifters, lists for the rest)."""
+        out: dict[str, Any] = {"format": SCENE_FORMAT}
+        out.update(_plain(self))
+        return out
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Scene:
-        """The Scene of a :meth:`to_dict` dict; validates everything."""
-        if not isinstance(d, Mapping) or d.get("format") != SCENE_FORMAT:
-            found = d.get("format") if isinstance(d, Mapping) else type(d).__name__
-            raise ValueError(f"not a millscope scene: format {found!r}, expected "
-                             f"{SCENE_FORMAT!r}")
-        try:
-            dd = d["drum"]
-            lift = dd["lifters"]
-            drum = Drum(dd["diameter"], dd["length"], dd["material"], dd["end_walls"],
-                        None if lift is None else Lifters(**lift))
-            return cls(drum=drum,
-                       charge=tuple(Fraction(**f) for f in d["charge"]),
-                       materials=tuple(Material(**m) for m in d["materials"]),
-                       pairs=tuple(Pair(**p) for p in d["pairs"]),
-                       speed_fraction=d["speed_fraction"], speed_hz=d["speed_hz"],
-                       critical_speed_convention=d["critical_speed_convention"],
-                       gravity=d["gravity"], clamp_normal_force=d["clamp_normal_force"],
-                       name=d["name"])
-        except (KeyError, TypeError) as exc:
-            raise ValueError(f"a scene dict is incomplete or malformed: {exc!r}") from None
+        """The Scene of a :meth:`to_dict` dict, validated.
+
+        Keys whose field has a default may be left out; an unknown key, a missing required
+        key or a ``"format"`` other than ``"millscope-scene-1"`` raises ``ValueError``.
+        """
+        if not isinstance(d, Mapping):
+            raise ValueError(
+                f"Scene.from_dict needs a mapping (a dict from Scene.to_dict), not "
+                f"{type(d).__name__}"
+            )
+        fmt = d.get("format")
+        if fmt != SCENE_FORMAT:
+            raise _fail("Scene.from_dict format", fmt, repr(SCENE_FORMAT))
+        body = {k: v for k, v in d.items() if k != "format"}
+        args = _arguments(cls, body, "scene")
+        drum = _arguments(Drum, args["drum"], "scene['drum']")
+        if drum.get("lifters") is not None:
+            drum["lifters"] = Lifters(
+                **_arguments(Lifters, drum["lifters"], "scene['drum']['lifters']")
+            )
+        args["drum"] = Drum(**drum)
+        for key, kind in (("charge", Fraction), ("materials", Material), ("pairs", Pair)):
+            items = args[key]
+            if not isinstance(items, (list, tuple)):
+                raise ValueError(
+                    f"Scene.from_dict: scene[{key!r}] must be a list, not {type(items).__name__}"
+                )
+            args[key] = tuple(
+                kind(**_arguments(kind, item, f"scene[{key!r}][{k}]"))
+                for k, item in enumerate(items)
+            )
+        return cls(**args)
 
     def replace(self, **changes: Any) -> Scene:
-        """A copy with some fields changed (validated again)."""
-        return replace(self, **changes)
+        """A copy with some fields changed, validated again (``dataclasses.replace``)."""
+        return dataclasses.replace(self, **changes)
 
     def describe(self) -> str:
-        """A short human summary."""
+        """A short human summary: drum, lifters, fractions, speed, smallest Rayleigh time."""
         d = self.drum
-        lift = ("no lifters" if d.lifters is None else
-                f"{d.lifters.count} {d.lifters.profile} lifters {d.lifters.width * 1e3:g} x "
-                f"{d.lifters.height * 1e3:g} mm")
+        if d.lifters is None:
+            lift = "no lifters"
+        else:
+            lf = d.lifters
+            tip = "" if lf.top_width is None else f" (tip {lf.top_width * 1e3:g} mm)"
+            lift = (
+                f"{lf.count} {lf.profile} lifters {lf.width * 1e3:g} mm wide{tip} x "
+                f"{lf.height * 1e3:g} mm high"
+            )
         ends = "end walls" if d.end_walls else "periodic ends"
-        lines = [f"{self.name or 'scene'}: drum {d.diameter:g} m x {d.length:g} m "
-                 f"({d.material}), {lift}, {ends}"]
+        lines = [
+            f"{self.name or 'scene'}: drum {d.diameter:g} m x {d.length:g} m ({d.material}), "
+            f"{lift}, {ends}"
+        ]
         for f in self.charge:
             lines.append(f"  {f.name}: {f.count} x {f.diameter * 1e3:g} mm {f.material}")
-        pct = self.omega / self.critical_speed_rad_s * 100.0
+        lines.append(
+            f"  charge: {self.n_particles} spheres, {self.charge_mass():.4g} kg, "
+            f"bed filling {100.0 * self.bed_filling():.1f} % of the drum at porosity 0.45"
+        )
+        pct = 100.0 * self.omega / self.critical_speed_rad_s
         t, which = self.min_rayleigh_time()
-        lines.append(f"  speed {pct:.1f} % of critical ({self.rotation_hz:.4f} Hz); "
-                     f"smallest Rayleigh time {t:.4g} s ({which})")
+        lines.append(
+            f"  speed: {pct:.1f} % of critical ({self.critical_speed_convention} convention), "
+            f"{self.rotation_hz:.4f} Hz; smallest Rayleigh time {t:.4g} s ({which})"
+        )
         return "\n".join(lines)
+
+
+# -- helpers of Scene ----------------------------------------------------------------------
+
+
+def _unique(where: str, names: list[str], what: str) -> dict[str, int]:
+    """``{name: index}``; ValueError naming the first repeated name."""
+    index: dict[str, int] = {}
+    for k, name in enumerate(names):
+        if name in index:
+            raise ValueError(
+                f"{where} = {names} is not valid; it must hold unique {what}, and {name!r} repeats"
+            )
+        index[name] = k
+    return index
+
+
+def _plain(obj: Any) -> Any:
+    """A dataclass (recursively, with tuples as lists) as plain JSON-able values."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {f.name: _plain(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.init}
+    if isinstance(obj, (list, tuple)):
+        return [_plain(x) for x in obj]
+    return obj
+
+
+def _arguments(cls: type, data: object, where: str) -> dict[str, Any]:
+    """The constructor arguments of dataclass ``cls`` in ``data``, checked for missing and
+    unknown keys (values are checked by the constructor)."""
+    if not isinstance(data, Mapping):
+        raise ValueError(
+            f"Scene.from_dict: {where} must be a mapping of {cls.__name__} fields, "
+            f"not {type(data).__name__}"
+        )
+    fields = [f for f in dataclasses.fields(cls) if f.init]
+    names = {f.name for f in fields}
+    unknown = sorted(str(k) for k in data if k not in names)
+    if unknown:
+        raise ValueError(
+            f"Scene.from_dict: {where} has unknown keys {unknown}; {cls.__name__} has "
+            f"{[f.name for f in fields]}"
+        )
+    missing = [
+        f.name
+        for f in fields
+        if f.name not in data
+        and f.default is dataclasses.MISSING
+        and f.default_factory is dataclasses.MISSING
+    ]
+    if missing:
+        raise ValueError(f"Scene.from_dict: {where} lacks the keys {missing}")
+    return dict(data)
