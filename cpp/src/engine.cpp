@@ -152,7 +152,9 @@ Engine::Engine(Config config)
   }
   wall_history_.assign(friction ? n_ * wall_slots * 3 : 0, 0.0);
   wall_lifter_.assign(2 * n_, -1);
-  buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>(6 * n_, 0.0));
+  // 6 x n force and torque sums; 12 x n when the law dissipates (engine.hpp, buffer_width)
+  const std::size_t width = variant_.law == Variant::Law::elastic ? 6 : 12;
+  buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>(width * n_, 0.0));
   row_split_.assign(static_cast<std::size_t>(threads_) + 1, 0);
 }
 

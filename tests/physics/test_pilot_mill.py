@@ -41,24 +41,21 @@ def test_torque_spectrum_peaks_at_the_lifter_harmonic(mill_run) -> None:  # type
     assert top.amplitude > 1.5 * np.median(spec.amplitude[band])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "open: the losses come out about 4.5 % above the drive power (soft pilot mill, 71 %); "
-    "suspected bias of the damping-loss estimate gamma v_(n+1/2)^2, while velocity Verlet "
-    "removes about F_d . v_(n+1) per step; see the issue-3 note"))
 def test_drive_power_equals_dissipation(mill_run) -> None:  # type: ignore[no-untyped-def]
-    """Over a steady stretch: omega x mean torque = mean (damping + friction) loss rate, within
-    3 %; the stored energies change little, and the full balance closes tighter still."""
+    """Over a steady stretch: omega x mean torque = mean dissipation rate within 3 %; with the
+    change of the stored energies the balance closes within 1 %."""
     scene, _, rec, before, after = mill_run
     span = RUN_S - STEADY_FROM_S
+    change = {k: (after[k] - before[k]) / span for k in after}
     drive_power = scene.omega * rec.mean_torque_Nm
-    ledger_drive = (after["drive_work"] - before["drive_work"]) / span
-    loss = ((after["damping_loss"] - before["damping_loss"])
-            + (after["friction_loss"] - before["friction_loss"])) / span
-    stored = sum(after[k] - before[k] for k in ("kinetic", "potential", "elastic")) / span
-    # the interval means cover every step; samples span whole steps, so up to dt / sample_dt
-    assert drive_power == pytest.approx(ledger_drive, rel=1e-3)
-    assert ledger_drive == pytest.approx(loss, rel=0.03)
-    assert ledger_drive == pytest.approx(loss + stored, rel=0.01)
+    stored = change["kinetic"] + change["potential"] + change["elastic"]
+    # the interval means cover every step, so the record's mean is the ledger's drive power
+    assert drive_power == pytest.approx(change["drive_work"], rel=1e-3)
+    assert change["drive_work"] == pytest.approx(change["dissipated"], rel=0.03)
+    assert change["drive_work"] == pytest.approx(change["dissipated"] + stored, rel=0.01)
+    # the split by cause is a first-order estimate above the exact total (engine.hpp, Ledger)
+    split = change["damping_loss"] + change["friction_loss"]
+    assert change["dissipated"] < split < 1.10 * change["dissipated"]
 
 
 def test_mean_torque_is_positive_and_scales_to_the_paper_mill(mill_run) -> None:  # type: ignore[no-untyped-def]

@@ -122,6 +122,8 @@ struct TangentialResult {
   double friction_loss;  // energy lost to Coulomb sliding this step, J (0 while sticking):
                          // the tangential work -F_t . v_t dt less the change of the spring's
                          // energy
+  Vec3 dissipative;      // the dissipating part of F_t, N: the dashpot -gamma_t v_t while
+                         // sticking, all of F_t while sliding
 };
 
 /// Mindlin no-slip spring with damping and Coulomb limit; history: d_t (3 doubles, m).
@@ -154,9 +156,11 @@ struct MindlinFriction {
 
     Vec3 f_t = -s_t * d_t;  // (5)
     double damping_power = 0.0;
+    Vec3 dissipative = Vec3::Zero();
     if constexpr (Damping::active) {
       const double gamma_t = Damping::gamma(p, s_t, k.m_star);
-      f_t -= gamma_t * k.v_t;  // (7)
+      dissipative = -gamma_t * k.v_t;  // (7)
+      f_t += dissipative;
       damping_power = gamma_t * k.v_t.squaredNorm();
     }
 
@@ -167,6 +171,7 @@ struct MindlinFriction {
       f_t *= limit / std::sqrt(f2);  // f2 > limit^2 >= 0, so f2 > 0
       d_t = -f_t / s_t;              // s_t > 0 whenever d_n > 0
       damping_power = 0.0;
+      dissipative = f_t;
     }
     // Energy lost to sliding this step: the tangential work -F_t . v_t dt less the change of
     // the spring's energy S_t |d_t|^2 / 2 (both at the current S_t). While sticking there is
@@ -177,7 +182,7 @@ struct MindlinFriction {
     if (sliding) {
       friction_loss = -f_t.dot(k.v_t) * dt - 0.5 * s_t * (d_t.squaredNorm() - before2);
     }
-    return TangentialResult{f_t, sliding, damping_power, friction_loss};
+    return TangentialResult{f_t, sliding, damping_power, friction_loss, dissipative};
   }
   /// Energy held by the tangential spring, S_t |d_t|^2 / 2, J (S_t at the current overlap).
   static double energy(const PairConstants& p, double sqrt_rd, const double* history) {
@@ -214,6 +219,10 @@ struct ContactForce {
                          // (F_ne - F_n) v_n, which is gamma_n v_n^2 unclamped, plus the
                          // tangential gamma_t |v_t|^2 while sticking
   double friction_loss;  // J this step, see TangentialResult (0 without friction)
+  Vec3 dissipative;      // the dissipating part of the force on i, N: the normal dashpot
+                         // (F_n - F_ne) n plus TangentialResult::dissipative. Its work with
+                         // the full-step velocity is what the integrator really removes
+                         // (engine.hpp, Ledger::dissipated)
 };
 
 /// A contact law composed of parts. history_size doubles per contact hold the state of the
@@ -228,6 +237,7 @@ struct ContactLaw {
   using rolling_part = Rolling;
   static constexpr NormalClamp clamp = Clamp;
   static constexpr bool has_friction = Tangential::active;
+  static constexpr bool dissipates = Damping::active || Tangential::active;
   static constexpr std::size_t tangential_offset = Normal::history_size + Damping::history_size;
   static constexpr std::size_t history_size =
       tangential_offset + Tangential::history_size + Rolling::history_size;
@@ -241,7 +251,13 @@ struct ContactLaw {
     if constexpr (Damping::active) f_n -= Damping::gamma(p, elastic.stiffness, k.m_star) * k.v_n;
     if constexpr (Clamp == NormalClamp::nonnegative) f_n = std::max(f_n, 0.0);
 
-    ContactForce c{f_n * k.n, Vec3::Zero(), f_n, false, (elastic.force - f_n) * k.v_n, 0.0};
+    ContactForce c{f_n * k.n,
+                   Vec3::Zero(),
+                   f_n,
+                   false,
+                   (elastic.force - f_n) * k.v_n,
+                   0.0,
+                   (f_n - elastic.force) * k.n};
     if constexpr (Tangential::active) {
       const TangentialResult t =
           Tangential::template evaluate<Damping>(p, k, f_n, dt, history + tangential_offset);
@@ -250,6 +266,7 @@ struct ContactLaw {
       c.sliding = t.sliding;
       c.damping_power += t.damping_power;
       c.friction_loss = t.friction_loss;
+      c.dissipative += t.dissipative;
     } else {
       (void)dt;
       (void)history;
@@ -311,6 +328,7 @@ struct PairForce {
   bool sliding;
   double damping_power;  // W, see ContactForce
   double friction_loss;  // J this step, see ContactForce
+  Vec3 dissipative;      // N, on i, see ContactForce (on j: -dissipative)
 };
 
 /// One touching contact (d_n > 0) given its geometry: normal n (from j to i), overlap, R*, m*,
@@ -321,8 +339,9 @@ inline PairForce pair_force(const PairConstants& p, const Vec3& n, double d_n, d
                             double* history) {
   const Kinematics k = make_kinematics(n, d_n, r_star, m_star, v_rel);
   const ContactForce c = Law::evaluate(p, k, dt, history);
-  PairForce out{true,     d_n,          n,         c.force,         Vec3::Zero(), Vec3::Zero(),
-                c.normal, c.tangential, c.sliding, c.damping_power, c.friction_loss};
+  PairForce out{true,          d_n,        n,         c.force,      Vec3::Zero(),
+                Vec3::Zero(),  c.normal,   c.tangential, c.sliding, c.damping_power,
+                c.friction_loss, c.dissipative};
   if constexpr (Law::has_friction) {
     const Vec3 nxf = n.cross(c.tangential);
     out.torque_i = -r_i * nxf;  // (-r_i n) x F_t
@@ -334,8 +353,8 @@ inline PairForce pair_force(const PairConstants& p, const Vec3& n, double d_n, d
 namespace detail {
 
 inline PairForce apart(const Vec3& n, double d_n) {
-  return PairForce{false, d_n, n, Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), 0.0,
-                   Vec3::Zero(), false, 0.0, 0.0};
+  return PairForce{false, d_n,          n,     Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
+                   0.0,   Vec3::Zero(), false, 0.0,          0.0,          Vec3::Zero()};
 }
 
 }  // namespace detail

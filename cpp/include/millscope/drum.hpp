@@ -221,8 +221,12 @@ inline LifterProximity closest_on_lifter(const Geometry& g, double phi, const Ve
   return g.rectangular_lifters() ? closest_on_box(g, f, x) : closest_on_trapezoid(g, f, x);
 }
 
-/// All contacts of a sphere (centre x, radius r) with the drum turned by theta.
-inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x, double r) {
+/// All contacts of a sphere (centre x, radius r) with the drum turned by theta, for a drum whose
+/// shape is known when compiling: without lifters (Lifters false) or with periodic ends
+/// (EndWalls false) those parts cost nothing (DESIGN.md section 7). The step kernels call this;
+/// Lifters and EndWalls must match g.lifters > 0 and g.end_walls.
+template <bool Lifters, bool EndWalls>
+inline WallContacts find_contacts_of(const Geometry& g, double theta, const Vec3& x, double r) {
   WallContacts out;
   const double rho = std::hypot(x.x(), x.y());
   // Shell: the inside of the cylinder rho = R.
@@ -232,7 +236,7 @@ inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x
     out.add({Part::shell, 0, shell_overlap, -radial,
              Vec3(g.radius * radial.x(), g.radius * radial.y(), x.z())});
   }
-  if (g.end_walls) {
+  if constexpr (EndWalls) {
     if (r - x.z() > 0.0)
       out.add({Part::end_low, 0, r - x.z(), Vec3(0, 0, 1), Vec3(x.x(), x.y(), 0)});
     if (x.z() + r - g.length > 0.0)
@@ -241,7 +245,8 @@ inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x
   }
   // Lifters: only a sphere reaching below the lifter tops can touch one, and then only the two
   // lifters whose centre lines are angularly nearest.
-  if (g.lifters > 0 && rho + r > g.radius - g.lifter_height) {
+  if constexpr (Lifters) {
+    if (!(rho + r > g.radius - g.lifter_height)) return out;
     const double spacing = 2.0 * 3.14159265358979323846 / g.lifters;
     const double rel = (std::atan2(x.y(), x.x()) - theta - g.lifter_phase) / spacing;
     const double nearest = std::floor(rel);
@@ -260,6 +265,17 @@ inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x
     }
   }
   return out;
+}
+
+/// find_contacts_of for a drum whose shape is known only at run time (probes, tests).
+inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x, double r) {
+  const bool lifters = g.lifters > 0;
+  if (lifters) {
+    return g.end_walls ? find_contacts_of<true, true>(g, theta, x, r)
+                       : find_contacts_of<true, false>(g, theta, x, r);
+  }
+  return g.end_walls ? find_contacts_of<false, true>(g, theta, x, r)
+                     : find_contacts_of<false, false>(g, theta, x, r);
 }
 
 }  // namespace millscope::drum

@@ -25,6 +25,7 @@ struct alignas(64) StepPartial {
   double shell = 0.0, lifters = 0.0, ends = 0.0;  // drive torque, N m
   double damping_power = 0.0;                     // W
   double friction_loss = 0.0;                     // J
+  double dissipation_shift = 0.0;                 // J: see Ledger::dissipated
   double displacement2 = 0.0;                     // largest squared move since the list build
   std::size_t bad = std::numeric_limits<std::size_t>::max();  // first particle in a bad state
 };
@@ -43,6 +44,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   using contact::Vec3;
   constexpr std::size_t hs = Law::history_size;  // per pair-contact history, doubles
   constexpr bool friction = Law::has_friction;
+  constexpr bool dissipates = Law::dissipates;
+  constexpr std::size_t width = buffer_width<Law>();  // per-thread buffer, x n doubles
   static_assert(!friction || hs == 3, "the wall history slots hold 3 doubles per contact");
 
   const std::size_t n = e.n_;
@@ -82,18 +85,27 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   bool stop = steps <= 0 && e.forces_valid_;
   std::string error;
 
+  for (const auto& b : e.buffers_)
+    if (b.size() < width * n) throw std::logic_error("pair buffers smaller than the kernel needs");
   if (e.list_.builds() == 0) rebuild(e);
 
   // Pair forces of the rows [row_split[t], row_split[t+1]) into thread t's buffer.
   auto pair_pass = [&](int t, double history_dt) {
     double* const buf = e.buffers_[static_cast<std::size_t>(t)].data();
-    std::fill(buf, buf + 6 * n, 0.0);
+    std::fill(buf, buf + width * n, 0.0);
     double* const bfx = buf;
     double* const bfy = buf + n;
     double* const bfz = buf + 2 * n;
     double* const btx = buf + 3 * n;
     double* const bty = buf + 4 * n;
     double* const btz = buf + 5 * n;
+    // the dissipating forces and their torques (only when the law dissipates)
+    double* const bdx = buf + 6 * n;
+    double* const bdy = buf + 7 * n;
+    double* const bdz = buf + 8 * n;
+    double* const bqx = buf + 9 * n;
+    double* const bqy = buf + 10 * n;
+    double* const bqz = buf + 11 * n;
     StepPartial& part = partial[static_cast<std::size_t>(t)];
     const std::uint32_t* const start = e.list_.start().data();
     const std::uint32_t* const partner = e.list_.partner().data();
@@ -142,7 +154,25 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           btz[j] += pf.torque_j.z();
           part.friction_loss += pf.friction_loss;
         }
-        part.damping_power += pf.damping_power;
+        if constexpr (dissipates) {
+          const Vec3& d = pf.dissipative;
+          bdx[i] += d.x();
+          bdy[i] += d.y();
+          bdz[i] += d.z();
+          bdx[j] -= d.x();
+          bdy[j] -= d.y();
+          bdz[j] -= d.z();
+          if constexpr (friction) {
+            const Vec3 nxd = nrm.cross(d);  // torques (-r_i n) x d on i, (r_j n) x (-d) on j
+            bqx[i] -= r[i] * nxd.x();
+            bqy[i] -= r[i] * nxd.y();
+            bqz[i] -= r[i] * nxd.z();
+            bqx[j] -= r[j] * nxd.x();
+            bqy[j] -= r[j] * nxd.y();
+            bqz[j] -= r[j] * nxd.z();
+          }
+          part.damping_power += pf.damping_power;
+        }
       }
     }
   };
@@ -156,13 +186,18 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     const double omega = e.omega_, theta = e.theta_;
     for (std::size_t i = lo; i < hi; ++i) {
       Vec3 f(0.0, -m[i] * gravity, 0.0), tq(0.0, 0.0, 0.0);
+      [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
       for (int b = 0; b < team; ++b) {
         const double* const buf = e.buffers_[static_cast<std::size_t>(b)].data();
         f += Vec3(buf[i], buf[n + i], buf[2 * n + i]);
         if constexpr (friction) tq += Vec3(buf[3 * n + i], buf[4 * n + i], buf[5 * n + i]);
+        if constexpr (dissipates) {
+          diss += Vec3(buf[6 * n + i], buf[7 * n + i], buf[8 * n + i]);
+          if constexpr (friction) diss_tq += Vec3(buf[9 * n + i], buf[10 * n + i], buf[11 * n + i]);
+        }
       }
       const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
-      const drum::WallContacts found = drum::find_contacts(geom, theta, xi, r[i]);
+      const drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(geom, theta, xi, r[i]);
       [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
       [[maybe_unused]] std::int32_t* const lifter_of_slot = &e.wall_lifter_[2 * i];
       [[maybe_unused]] double* const wall_hist =
@@ -215,7 +250,11 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         } else {
           part.ends += arm_torque;
         }
-        part.damping_power += pf.damping_power;
+        if constexpr (dissipates) {
+          part.damping_power += pf.damping_power;
+          diss += pf.dissipative;
+          if constexpr (friction) diss_tq += wc.normal.cross(pf.dissipative) * -r[i];
+        }
         if constexpr (friction) {
           tq += pf.torque_i;
           part.friction_loss += pf.friction_loss;
@@ -239,14 +278,20 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       ty[i] = tq.y();
       tz[i] = tq.z();
       if (kick) {
-        vx[i] += f.x() * inv_m[i] * half_dt;
-        vy[i] += f.y() * inv_m[i] * half_dt;
-        vz[i] += f.z() * inv_m[i] * half_dt;
+        const Vec3 dv = f * (inv_m[i] * half_dt);
+        vx[i] += dv.x();
+        vy[i] += dv.y();
+        vz[i] += dv.z();
+        [[maybe_unused]] Vec3 dw(0.0, 0.0, 0.0);
         if constexpr (friction) {
-          wx[i] += tq.x() * inv_i[i] * half_dt;
-          wy[i] += tq.y() * inv_i[i] * half_dt;
-          wz[i] += tq.z() * inv_i[i] * half_dt;
+          dw = tq * (inv_i[i] * half_dt);
+          wx[i] += dw.x();
+          wy[i] += dw.y();
+          wz[i] += dw.z();
         }
+        // The dissipating forces worked against the half-step velocities above; what the
+        // integrator removes is their work with the full-step ones (Ledger::dissipated).
+        if constexpr (dissipates) part.dissipation_shift -= (diss.dot(dv) + diss_tq.dot(dw)) * dt;
       }
       // Guard: nothing non-finite, no centre beyond the shell.
       const double check = fx[i] + fy[i] + fz[i] + vx[i] + vy[i] + vz[i] + wx[i] + wy[i] + wz[i];
@@ -291,7 +336,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // After a pass pair: sum the per-thread partials in thread order (reproducible).
   auto close_step = [&](double ledger_dt) {
     Torque tq;
-    double damping = 0.0, friction_loss = 0.0;
+    double damping = 0.0, friction_loss = 0.0, shift = 0.0;
     std::size_t bad = std::numeric_limits<std::size_t>::max();
     for (const auto& p : partial) {
       tq.shell += p.shell;
@@ -299,13 +344,17 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       tq.ends += p.ends;
       damping += p.damping_power;
       friction_loss += p.friction_loss;
+      shift += p.dissipation_shift;
       bad = std::min(bad, p.bad);
     }
     tq.total = tq.shell + tq.lifters + tq.ends;
     e.torque_ = tq;
     e.ledger_.drive_work += e.omega_ * tq.total * ledger_dt;
     e.ledger_.damping_loss += damping * ledger_dt;
-    if (ledger_dt > 0.0) e.ledger_.friction_loss += friction_loss;
+    if (ledger_dt > 0.0) {
+      e.ledger_.friction_loss += friction_loss;
+      e.ledger_.dissipated += damping * ledger_dt + friction_loss + shift;
+    }
     if (bad != std::numeric_limits<std::size_t>::max()) {
       error = describe_bad(e, bad);
       return true;
