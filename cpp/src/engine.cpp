@@ -152,6 +152,7 @@ Engine::Engine(Config config)
   }
   wall_history_.assign(friction ? n_ * wall_slots * 3 : 0, 0.0);
   wall_lifter_.assign(2 * n_, -1);
+  wall_held_.assign(friction ? n_ : 0, 0);
   // 6 x n force and torque sums; 12 x n when the law dissipates (engine.hpp, buffer_width)
   const std::size_t width = variant_.law == Variant::Law::elastic ? 6 : 12;
   buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>(width * n_, 0.0));
@@ -165,7 +166,7 @@ double Engine::bytes_per_particle() const {
                         &ty_, &tz_, &r_, &m_, &inv_m_, &inv_i_, &x_ref_, &y_ref_, &z_ref_,
                         &wall_history_})
     total += bytes(*v);
-  total += bytes(mat_) + bytes(wall_lifter_);
+  total += bytes(mat_) + bytes(wall_lifter_) + bytes(wall_held_);
   for (const auto& b : buffers_) total += bytes(b);
   total += bytes(list_.start()) + bytes(list_.partner()) + bytes(list_.history());
   return total / static_cast<double>(n_);
@@ -211,6 +212,7 @@ void Engine::set_positions(const double* xyz) {
                                 config_.geometry.end_walls ? 0.0 : config_.geometry.length);
   std::fill(wall_history_.begin(), wall_history_.end(), 0.0);
   std::fill(wall_lifter_.begin(), wall_lifter_.end(), -1);
+  std::fill(wall_held_.begin(), wall_held_.end(), std::uint8_t{0});
   forces_valid_ = false;
 }
 void Engine::set_velocities(const double* v) {
@@ -429,6 +431,17 @@ void Engine::restore(const Snapshot& s) {
   copy_in(s.x_ref.data(), n_, x_ref_, y_ref_, z_ref_, "reference positions");
   wall_history_ = s.wall_history;
   wall_lifter_ = s.wall_lifter;
+  // Which slots are held follows from the history (a held slot whose history is exactly zero
+  // behaves the same when cleared).
+  for (std::size_t i = 0; i < wall_held_.size(); ++i) {
+    unsigned held = 0;
+    for (std::size_t slot = 0; slot < wall_slots; ++slot) {
+      const double* h = &wall_history_[(i * wall_slots + slot) * 3];
+      const bool lifter_held = slot >= 3 && wall_lifter_[2 * i + slot - 3] >= 0;
+      if (lifter_held || h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0) held |= 1u << slot;
+    }
+    wall_held_[i] = static_cast<std::uint8_t>(held);
+  }
   step_ = s.step;
   rotation_start_ = s.rotation_start;
   last_sample_offset_ = s.last_sample_offset;

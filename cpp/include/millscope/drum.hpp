@@ -228,7 +228,17 @@ inline LifterProximity closest_on_lifter(const Geometry& g, double phi, const Ve
 template <bool Lifters, bool EndWalls>
 inline WallContacts find_contacts_of(const Geometry& g, double theta, const Vec3& x, double r) {
   WallContacts out;
-  const double rho = std::hypot(x.x(), x.y());
+  const double rho2 = x.x() * x.x() + x.y() * x.y();
+  // Far from the shell and the lifters (and, below, from the end walls): nothing to find. The
+  // radial test uses squares, so a particle in the bulk costs no square root.
+  const double reach = g.radius - (Lifters ? g.lifter_height : 0.0) - r;
+  const bool near_shell = !(reach > 0.0 && rho2 < reach * reach);
+  if constexpr (EndWalls) {
+    if (!near_shell && x.z() > r && x.z() + r < g.length) return out;
+  } else {
+    if (!near_shell) return out;
+  }
+  const double rho = std::sqrt(rho2);
   // Shell: the inside of the cylinder rho = R.
   const double shell_overlap = rho + r - g.radius;
   if (shell_overlap > 0.0 && rho > 0.0) {

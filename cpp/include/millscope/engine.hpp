@@ -215,6 +215,7 @@ class Engine {
   std::vector<double> x_ref_, y_ref_, z_ref_;
   std::vector<double> wall_history_;          // n x wall_slots x 3 (friction only)
   std::vector<std::int32_t> wall_lifter_;     // n x 2: lifter index of each lifter slot, -1 free
+  std::vector<std::uint8_t> wall_held_;       // n: bit s set while wall slot s holds a contact
   std::vector<std::vector<double>> buffers_;  // per thread: buffer_width x n sums (forces,
                                               // torques; dissipating forces and torques)
   std::vector<std::size_t> row_split_;        // threads + 1 row boundaries balancing pairs

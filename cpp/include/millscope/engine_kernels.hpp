@@ -262,14 +262,15 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       }
       if constexpr (friction) {
         // Contacts that ended: clear their history and free their lifter slot.
-        for (std::size_t slot = 0; slot < wall_slots; ++slot) {
-          if (used & (1u << slot)) continue;
-          if (slot >= 3) {
-            if (lifter_of_slot[slot - 3] < 0) continue;
-            lifter_of_slot[slot - 3] = -1;
+        const unsigned ended = e.wall_held_[i] & ~used;
+        if (ended != 0) {
+          for (std::size_t slot = 0; slot < wall_slots; ++slot) {
+            if (!(ended & (1u << slot))) continue;
+            if (slot >= 3) lifter_of_slot[slot - 3] = -1;
+            Law::reset(wall_hist + slot * 3);
           }
-          Law::reset(wall_hist + slot * 3);
         }
+        e.wall_held_[i] = static_cast<std::uint8_t>(used);
       }
       fx[i] = f.x();
       fy[i] = f.y();
