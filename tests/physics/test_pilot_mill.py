@@ -1,10 +1,10 @@
 """The balls-only pilot mill at reduced stiffness (scale "soft": the paper's geometry and
 2466 balls, shear modulus x 0.001), end to end through Simulation: the torque spectrum peaks at
 n_lifters x f_rot, and the drive's power equals the dissipation (power balance). One run
-shared by the tests of this module (about 20 s on 2 cores).
+shared by the tests of this module (about 35 s on 2 cores).
 
 Interval-mean sampling: instantaneous 10 ms samples alias the impact noise into 0-50 Hz and,
-in 2 s blocks, bury the lifter harmonic (DESIGN.md section 2)."""
+in short blocks, bury the lifter harmonic (DESIGN.md section 2)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,8 @@ import pytest
 
 import millscope as ms
 
-RUN_S = 3.0  # simulated after settling, s
+RUN_S = 5.0  # simulated after settling, s: a 4 s block (in 2 s blocks the LTH is not
+# reliably the strongest line: seeds 1 and 2 both put 10.5 Hz above it from 1 to 3 s)
 STEADY_FROM_S = 1.0  # the charge has found its shape after about 1 s
 
 
@@ -61,7 +62,7 @@ def test_drive_power_equals_dissipation(mill_run) -> None:  # type: ignore[no-un
 def test_mean_torque_is_positive_and_scales_to_the_paper_mill(mill_run) -> None:  # type: ignore[no-untyped-def]
     """The charge resists rotation (positive torque, DESIGN.md sign), near the 265 N m of the
     balls-only pilot mill at 71 % (DESIGN.md section 2); 10 % for the softer material and a
-    2 s mean."""
+    4 s mean."""
     _, _, rec, _, _ = mill_run
     assert rec.mean_torque_Nm == pytest.approx(265.0, rel=0.10)
 
