@@ -153,9 +153,12 @@ Engine::Engine(Config config)
   wall_history_.assign(friction ? n_ * wall_slots * 3 : 0, 0.0);
   wall_lifter_.assign(2 * n_, -1);
   wall_held_.assign(friction ? n_ : 0, 0);
-  // 6 x n force and torque sums; 12 x n when the law dissipates (engine.hpp, buffer_width)
-  const std::size_t width = variant_.law == Variant::Law::elastic ? 6 : 12;
-  buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>(width * n_, 0.0));
+  // Forces and torques (6), and when the law dissipates, the dissipating force and torque (6
+  // more) per particle (engine.hpp, buffer_width). The buffers are sized by split_rows.
+  const bool dissipates = variant_.law != Variant::Law::elastic;
+  buffer_width_ = dissipates ? 12 : 6;
+  dissipative_.assign(dissipates ? 6 * n_ : 0, 0.0);
+  buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>());
   row_split_.assign(static_cast<std::size_t>(threads_) + 1, 0);
 }
 
@@ -164,7 +167,7 @@ double Engine::bytes_per_particle() const {
   double total = 0.0;
   for (const auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_,
                         &ty_, &tz_, &r_, &m_, &inv_m_, &inv_i_, &x_ref_, &y_ref_, &z_ref_,
-                        &wall_history_})
+                        &wall_history_, &dissipative_})
     total += bytes(*v);
   total += bytes(mat_) + bytes(wall_lifter_) + bytes(wall_held_);
   for (const auto& b : buffers_) total += bytes(b);
@@ -474,6 +477,9 @@ void Engine::Access::split_rows(Engine& e) {
     while (row < e.n_ && static_cast<double>(start[row]) < goal) ++row;
     e.row_split_[t] = row;
   }
+  // Thread t buffers what its rows give the particles after them.
+  for (std::size_t t = 0; t < team; ++t)
+    e.buffers_[t].resize(e.buffer_width_ * (e.n_ - e.row_split_[t + 1]));
 }
 
 std::string Engine::Access::describe_bad(const Engine& e, std::size_t i) {

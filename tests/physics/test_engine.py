@@ -199,11 +199,14 @@ def test_charge_at_rest_torque_balances_gravity() -> None:
         if eng.kinetic_energy() / n < 1e-7:
             break
     assert eng.kinetic_energy() / n < 1e-7, "the charge did not come to rest"
+    # At rest the balls still ring in their contacts (period ~ 1e-4 s here), so the
+    # instantaneous torque scatters; its mean over 10 ms does not.
+    eng.start_rotation(0.0)
+    torque = float(eng.advance_sampled(0.01, True, 1)[0, 1])
     pos = eng.positions
     mass = np.asarray(eng.mass)
     weight_moment = float(np.sum(mass * G * pos[:, 0]))
     scale = float(mass.sum()) * G * R
-    torque = eng.torque()["total"]
     assert abs(torque - weight_moment) < 1e-3 * scale
     assert abs(torque) < 0.02 * scale
     assert np.all(np.hypot(pos[:, 0], pos[:, 1]) + r <= R * (1 + 1e-3))

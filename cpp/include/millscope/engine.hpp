@@ -216,8 +216,11 @@ class Engine {
   std::vector<double> wall_history_;          // n x wall_slots x 3 (friction only)
   std::vector<std::int32_t> wall_lifter_;     // n x 2: lifter index of each lifter slot, -1 free
   std::vector<std::uint8_t> wall_held_;       // n: bit s set while wall slot s holds a contact
-  std::vector<std::vector<double>> buffers_;  // per thread: buffer_width x n sums (forces,
-                                              // torques; dissipating forces and torques)
+  std::size_t buffer_width_ = 6;               // sums per particle, see buffer_width()
+  std::vector<double> dissipative_;           // 6 x n: pair sums of the dissipating forces and
+                                              // torques (only when the law dissipates)
+  std::vector<std::vector<double>> buffers_;  // per thread t: buffer_width x (n - row_split[t+1])
+                                              // sums for the particles after its rows
   std::vector<std::size_t> row_split_;        // threads + 1 row boundaries balancing pairs
 
   long step_ = 0;

@@ -85,33 +85,36 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   bool stop = steps <= 0 && e.forces_valid_;
   std::string error;
 
-  for (const auto& b : e.buffers_)
-    if (b.size() < width * n) throw std::logic_error("pair buffers smaller than the kernel needs");
+  if (e.buffer_width_ != width || (dissipates && e.dissipative_.size() != 6 * n))
+    throw std::logic_error("the engine's pair buffers do not fit its step kernel");
   if (e.list_.builds() == 0) rebuild(e);
 
-  // Pair forces of the rows [row_split[t], row_split[t+1]) into thread t's buffer.
+  // Pair forces of the rows [row_split[t], row_split[t+1]) ("own" particles of thread t). The
+  // list is a half list (j > i), so every write of thread t goes to a particle at or after its
+  // first row: own particles are summed straight into the shared arrays (forces into fx.., the
+  // dissipating parts into e.dissipative_), later ones into thread t's buffer, which holds only
+  // the particles after its rows. No two threads write the same place.
+  double* const dissip = e.dissipative_.data();
   auto pair_pass = [&](int t, double history_dt) {
+    const std::size_t row_begin = e.row_split_[static_cast<std::size_t>(t)];
+    const std::size_t own_end = e.row_split_[static_cast<std::size_t>(t) + 1];
+    const std::size_t later = n - own_end;  // particles in this thread's buffer
     double* const buf = e.buffers_[static_cast<std::size_t>(t)].data();
-    std::fill(buf, buf + width * n, 0.0);
-    double* const bfx = buf;
-    double* const bfy = buf + n;
-    double* const bfz = buf + 2 * n;
-    double* const btx = buf + 3 * n;
-    double* const bty = buf + 4 * n;
-    double* const btz = buf + 5 * n;
-    // the dissipating forces and their torques (only when the law dissipates)
-    double* const bdx = buf + 6 * n;
-    double* const bdy = buf + 7 * n;
-    double* const bdz = buf + 8 * n;
-    double* const bqx = buf + 9 * n;
-    double* const bqy = buf + 10 * n;
-    double* const bqz = buf + 11 * n;
+    std::fill(buf, buf + width * later, 0.0);
+    // quantity c of particle k: own[c][k] for k < own_end, buffered[c][k - own_end] after
+    double* const own[12] = {fx,         fy,         fz,         tx,
+                             ty,         tz,         dissip,     dissip + n,
+                             dissip + 2 * n, dissip + 3 * n, dissip + 4 * n, dissip + 5 * n};
+    double* buffered[12];
+    for (std::size_t c = 0; c < 12; ++c) buffered[c] = c < width ? buf + c * later : nullptr;
+    for (std::size_t c = 0; c < width; ++c) std::fill(own[c] + row_begin, own[c] + own_end, 0.0);
+
     StepPartial& part = partial[static_cast<std::size_t>(t)];
     const std::uint32_t* const start = e.list_.start().data();
     const std::uint32_t* const partner = e.list_.partner().data();
     double* const history = e.list_.history().data();
-    const std::size_t row_end = e.row_split_[static_cast<std::size_t>(t) + 1];
-    for (std::size_t i = e.row_split_[static_cast<std::size_t>(t)]; i < row_end; ++i) {
+    for (std::size_t i = row_begin; i < own_end; ++i) {
+      double sum_i[12] = {};  // this row's sums for i, in the layout of own[]
       for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
         const std::size_t j = partner[s];
         double* const hist = hs > 0 ? history + static_cast<std::size_t>(s) * hs : nullptr;
@@ -125,7 +128,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           continue;
         }
         const double dist = std::sqrt(d2);
-        const Vec3 nrm(dx / dist, dy / dist, dz / dist);  // from j to i
+        const double inv_dist = 1.0 / dist;
+        const Vec3 nrm(dx * inv_dist, dy * inv_dist, dz * inv_dist);  // from j to i
         const Vec3 vi(vx[i], vy[i], vz[i]), vj(vx[j], vy[j], vz[j]);
         Vec3 v_rel = vi - vj;
         if constexpr (friction) {
@@ -136,44 +140,43 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
             OneMaterial ? pc_one
                         : table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(mat[j]));
         const double r_star = r[i] * r[j] / r_sum;
-        const double m_star = m[i] * m[j] / (m[i] + m[j]);
+        const double m_star = 1.0 / (inv_m[i] + inv_m[j]);
         const contact::PairForce pf = contact::pair_force<Law>(
             pc, nrm, r_sum - dist, r_star, m_star, v_rel, r[i], r[j], history_dt, hist);
-        bfx[i] += pf.force_i.x();
-        bfy[i] += pf.force_i.y();
-        bfz[i] += pf.force_i.z();
-        bfx[j] -= pf.force_i.x();
-        bfy[j] -= pf.force_i.y();
-        bfz[j] -= pf.force_i.z();
+
+        // What i and j receive, in the layout of own[].
+        double to_j[12];
+        auto put = [&](std::size_t c, const Vec3& on_i, const Vec3& on_j) {
+          for (std::size_t k = 0; k < 3; ++k) {
+            sum_i[c + k] += on_i[static_cast<Eigen::Index>(k)];
+            to_j[c + k] = on_j[static_cast<Eigen::Index>(k)];
+          }
+        };
+        put(0, pf.force_i, -pf.force_i);
         if constexpr (friction) {
-          btx[i] += pf.torque_i.x();
-          bty[i] += pf.torque_i.y();
-          btz[i] += pf.torque_i.z();
-          btx[j] += pf.torque_j.x();
-          bty[j] += pf.torque_j.y();
-          btz[j] += pf.torque_j.z();
+          put(3, pf.torque_i, pf.torque_j);
           part.friction_loss += pf.friction_loss;
         }
         if constexpr (dissipates) {
-          const Vec3& d = pf.dissipative;
-          bdx[i] += d.x();
-          bdy[i] += d.y();
-          bdz[i] += d.z();
-          bdx[j] -= d.x();
-          bdy[j] -= d.y();
-          bdz[j] -= d.z();
+          put(6, pf.dissipative, -pf.dissipative);
           if constexpr (friction) {
-            const Vec3 nxd = nrm.cross(d);  // torques (-r_i n) x d on i, (r_j n) x (-d) on j
-            bqx[i] -= r[i] * nxd.x();
-            bqy[i] -= r[i] * nxd.y();
-            bqz[i] -= r[i] * nxd.z();
-            bqx[j] -= r[j] * nxd.x();
-            bqy[j] -= r[j] * nxd.y();
-            bqz[j] -= r[j] * nxd.z();
+            const Vec3 nxd = nrm.cross(pf.dissipative);  // (-r_i n) x d on i, (r_j n) x (-d) on j
+            put(9, -r[i] * nxd, -r[j] * nxd);
           }
           part.damping_power += pf.damping_power;
         }
+        const bool j_own = j < own_end;
+        const std::size_t k = j_own ? j : j - own_end;
+        double* const* const dst = j_own ? own : buffered;
+        for (std::size_t c = 0; c < 3; ++c) dst[c][k] += to_j[c];
+        if constexpr (friction)
+          for (std::size_t c = 3; c < 6; ++c) dst[c][k] += to_j[c];
+        if constexpr (dissipates)
+          for (std::size_t c = 6; c < 9; ++c) dst[c][k] += to_j[c];
+        if constexpr (dissipates && friction)
+          for (std::size_t c = 9; c < 12; ++c) dst[c][k] += to_j[c];
       }
+      for (std::size_t c = 0; c < width; ++c) own[c][i] += sum_i[c];
     }
   };
 
@@ -185,15 +188,25 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
     const double omega = e.omega_, theta = e.theta_;
     for (std::size_t i = lo; i < hi; ++i) {
-      Vec3 f(0.0, -m[i] * gravity, 0.0), tq(0.0, 0.0, 0.0);
+      // pair sums: the owner's, then those buffered by the threads whose rows come before i
+      Vec3 f(fx[i], fy[i] - m[i] * gravity, fz[i]);
+      Vec3 tq = friction ? Vec3(tx[i], ty[i], tz[i]) : Vec3(0.0, 0.0, 0.0);
       [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
+      if constexpr (dissipates) {
+        diss = Vec3(dissip[i], dissip[n + i], dissip[2 * n + i]);
+        if constexpr (friction) diss_tq = Vec3(dissip[3 * n + i], dissip[4 * n + i], dissip[5 * n + i]);
+      }
       for (int b = 0; b < team; ++b) {
+        const std::size_t own_end = e.row_split_[static_cast<std::size_t>(b) + 1];
+        if (i < own_end) break;  // row_split grows with b
+        const std::size_t later = n - own_end, k = i - own_end;
         const double* const buf = e.buffers_[static_cast<std::size_t>(b)].data();
-        f += Vec3(buf[i], buf[n + i], buf[2 * n + i]);
-        if constexpr (friction) tq += Vec3(buf[3 * n + i], buf[4 * n + i], buf[5 * n + i]);
+        f += Vec3(buf[k], buf[later + k], buf[2 * later + k]);
+        if constexpr (friction) tq += Vec3(buf[3 * later + k], buf[4 * later + k], buf[5 * later + k]);
         if constexpr (dissipates) {
-          diss += Vec3(buf[6 * n + i], buf[7 * n + i], buf[8 * n + i]);
-          if constexpr (friction) diss_tq += Vec3(buf[9 * n + i], buf[10 * n + i], buf[11 * n + i]);
+          diss += Vec3(buf[6 * later + k], buf[7 * later + k], buf[8 * later + k]);
+          if constexpr (friction)
+            diss_tq += Vec3(buf[9 * later + k], buf[10 * later + k], buf[11 * later + k]);
         }
       }
       const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
