@@ -189,6 +189,11 @@ class Simulation:
         return (self._engine.step_count - self._engine.rotation_start_step) * self.dt
 
     @property
+    def drum_angle(self) -> float:
+        """Angle the drum has turned through about +z since it was filled, rad."""
+        return float(self._engine.drum_angle)
+
+    @property
     def variant(self) -> str:
         """Which specialised engine kernel the scene runs on (law, materials, lifters, ends)."""
         return str(self._engine.variant)
