@@ -149,9 +149,13 @@ struct MindlinFriction {
   static constexpr std::size_t history_size = 3;
   static constexpr bool active = true;
 
+  /// gamma_n: the normal dashpot's coefficient gamma(S_n) (0 without damping); the tangential
+  /// one follows from it, gamma(S_t) = gamma_n sqrt(S_t / S_n) (PairConstants).
   template <class Damping>
-  MILLSCOPE_HOT_INLINE static TangentialResult evaluate(const PairConstants& p, const Kinematics& k, double f_n,
-                                   double dt, double* history) {
+  MILLSCOPE_HOT_INLINE static TangentialResult evaluate(const PairConstants& p,
+                                                        const Kinematics& k, double f_n,
+                                                        double gamma_n, double dt,
+                                                        double* history) {
     Eigen::Map<Vec3> d_t(history);
     const double s_t = 8.0 * p.g_star * k.sqrt_rd;  // (6)
     // Rotate into the current tangent plane, keeping the magnitude.
@@ -166,7 +170,7 @@ struct MindlinFriction {
     double damping_power = 0.0;
     Vec3 dissipative = Vec3::Zero();
     if constexpr (Damping::active) {
-      const double gamma_t = Damping::gamma(p, s_t, k.m_star);
+      const double gamma_t = gamma_n * p.tangential_damping_ratio;  // gamma(S_t), (7)
       dissipative = -gamma_t * k.v_t;  // (7)
       f_t += dissipative;
       damping_power = gamma_t * k.v_t.squaredNorm();
@@ -256,7 +260,11 @@ struct ContactLaw {
                                double* history) {
     const auto elastic = Normal::evaluate(p, k);
     double f_n = elastic.force;
-    if constexpr (Damping::active) f_n -= Damping::gamma(p, elastic.stiffness, k.m_star) * k.v_n;
+    double gamma_n = 0.0;
+    if constexpr (Damping::active) {
+      gamma_n = Damping::gamma(p, elastic.stiffness, k.m_star);
+      f_n -= gamma_n * k.v_n;  // (2)
+    }
     if constexpr (Clamp == NormalClamp::nonnegative) f_n = std::max(f_n, 0.0);
 
     ContactForce c{f_n * k.n,
@@ -268,7 +276,7 @@ struct ContactLaw {
                    (f_n - elastic.force) * k.n};
     if constexpr (Tangential::active) {
       const TangentialResult t =
-          Tangential::template evaluate<Damping>(p, k, f_n, dt, history + tangential_offset);
+          Tangential::template evaluate<Damping>(p, k, f_n, gamma_n, dt, history + tangential_offset);
       c.force += t.force;
       c.tangential = t.force;
       c.sliding = t.sliding;
@@ -295,6 +303,14 @@ struct ContactLaw {
   /// Clears the history of a contact that has ended.
   static void reset(double* history) {
     for (std::size_t i = 0; i < history_size; ++i) history[i] = 0.0;
+  }
+
+  /// reset() for a pair that may long have been apart: writes only when something is held, so
+  /// the hot loop does not dirty the history of every listed pair that does not touch.
+  static void clear(double* history) {
+    bool held = false;
+    for (std::size_t i = 0; i < history_size; ++i) held |= history[i] != 0.0;
+    if (held) reset(history);
   }
 };
 

@@ -23,6 +23,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace millscope::drum {
 
@@ -114,10 +115,34 @@ struct LifterFrame {
   double a, b;
 };
 
-inline LifterFrame lifter_frame(double phi, const Vec3& x) {
-  const double c = std::cos(phi), s = std::sin(phi);
+/// The frame of the centre line at angle phi, given c = cos(phi) and s = sin(phi).
+inline LifterFrame lifter_frame(double c, double s, const Vec3& x) {
   return {Vec3(c, s, 0.0), Vec3(-s, c, 0.0), c * x.x() + s * x.y(), -s * x.x() + c * x.y()};
 }
+
+inline LifterFrame lifter_frame(double phi, const Vec3& x) {
+  return lifter_frame(std::cos(phi), std::sin(phi), x);
+}
+
+/// Where the lifters are at one drum angle: cos and sin of each centre line's angle
+/// phi_k = theta + phase + 2 pi k / n, computed once per step instead of per particle.
+struct LifterAngles {
+  double theta = 0.0;
+  std::vector<double> cos_phi, sin_phi;
+
+  void update(const Geometry& g, double drum_theta) {
+    theta = drum_theta;
+    const auto n = static_cast<std::size_t>(std::max(g.lifters, 0));
+    cos_phi.resize(n);
+    sin_phi.resize(n);
+    const double spacing = n > 0 ? 2.0 * 3.14159265358979323846 / static_cast<double>(n) : 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double phi = drum_theta + g.lifter_phase + spacing * static_cast<double>(k);
+      cos_phi[k] = std::cos(phi);
+      sin_phi[k] = std::sin(phi);
+    }
+  }
+};
 
 // The prism is (cross-section) x [0, L], a Cartesian product of convex sets, and the projection
 // onto such a product is the product of the projections: the closest point is (closest point of
@@ -216,9 +241,12 @@ inline LifterProximity closest_on_trapezoid(const Geometry& g, const LifterFrame
 /// Closest point of the lifter whose centre line is at angle phi to x. Rectangular lifters take
 /// the cheaper clamp path; the test is on the geometry alone, so the branch always goes the same
 /// way in a run.
-inline LifterProximity closest_on_lifter(const Geometry& g, double phi, const Vec3& x) {
-  const LifterFrame f = lifter_frame(phi, x);
+inline LifterProximity closest_on_lifter(const Geometry& g, const LifterFrame& f, const Vec3& x) {
   return g.rectangular_lifters() ? closest_on_box(g, f, x) : closest_on_trapezoid(g, f, x);
+}
+
+inline LifterProximity closest_on_lifter(const Geometry& g, double phi, const Vec3& x) {
+  return closest_on_lifter(g, lifter_frame(phi, x), x);
 }
 
 /// All contacts of a sphere (centre x, radius r) with the drum turned by theta, for a drum whose
@@ -226,7 +254,8 @@ inline LifterProximity closest_on_lifter(const Geometry& g, double phi, const Ve
 /// (EndWalls false) those parts cost nothing (DESIGN.md section 7). The step kernels call this;
 /// Lifters and EndWalls must match g.lifters > 0 and g.end_walls.
 template <bool Lifters, bool EndWalls>
-inline WallContacts find_contacts_of(const Geometry& g, double theta, const Vec3& x, double r) {
+inline WallContacts find_contacts_of(const Geometry& g, const LifterAngles& at, const Vec3& x,
+                                     double r) {
   WallContacts out;
   const double rho2 = x.x() * x.x() + x.y() * x.y();
   // Far from the shell and the lifters (and, below, from the end walls): nothing to find. The
@@ -258,13 +287,14 @@ inline WallContacts find_contacts_of(const Geometry& g, double theta, const Vec3
   if constexpr (Lifters) {
     if (!(rho + r > g.radius - g.lifter_height)) return out;
     const double spacing = 2.0 * 3.14159265358979323846 / g.lifters;
-    const double rel = (std::atan2(x.y(), x.x()) - theta - g.lifter_phase) / spacing;
+    const double rel = (std::atan2(x.y(), x.x()) - at.theta - g.lifter_phase) / spacing;
     const double nearest = std::floor(rel);
     for (double kk : {nearest, nearest + 1.0}) {
       int k = static_cast<int>(kk) % g.lifters;
       if (k < 0) k += g.lifters;
-      const double phi = theta + g.lifter_phase + spacing * kk;
-      const LifterProximity p = closest_on_lifter(g, phi, x);
+      const auto slot = static_cast<std::size_t>(k);
+      const LifterFrame f = lifter_frame(at.cos_phi[slot], at.sin_phi[slot], x);
+      const LifterProximity p = closest_on_lifter(g, f, x);
       const Vec3 d = x - p.point;
       const double dist = d.norm();
       if (p.inside) {
@@ -279,13 +309,14 @@ inline WallContacts find_contacts_of(const Geometry& g, double theta, const Vec3
 
 /// find_contacts_of for a drum whose shape is known only at run time (probes, tests).
 inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x, double r) {
-  const bool lifters = g.lifters > 0;
-  if (lifters) {
-    return g.end_walls ? find_contacts_of<true, true>(g, theta, x, r)
-                       : find_contacts_of<true, false>(g, theta, x, r);
+  LifterAngles at;
+  at.update(g, theta);
+  if (g.lifters > 0) {
+    return g.end_walls ? find_contacts_of<true, true>(g, at, x, r)
+                       : find_contacts_of<true, false>(g, at, x, r);
   }
-  return g.end_walls ? find_contacts_of<false, true>(g, theta, x, r)
-                     : find_contacts_of<false, false>(g, theta, x, r);
+  return g.end_walls ? find_contacts_of<false, true>(g, at, x, r)
+                     : find_contacts_of<false, false>(g, at, x, r);
 }
 
 }  // namespace millscope::drum

@@ -216,6 +216,7 @@ class Engine {
   std::vector<double> wall_history_;          // n x wall_slots x 3 (friction only)
   std::vector<std::int32_t> wall_lifter_;     // n x 2: lifter index of each lifter slot, -1 free
   std::vector<std::uint8_t> wall_held_;       // n: bit s set while wall slot s holds a contact
+  drum::LifterAngles lifter_angles_;          // the lifters at theta_ (kept in step by the kernel)
   std::size_t buffer_width_ = 6;               // sums per particle, see buffer_width()
   std::vector<double> dissipative_;           // 6 x n: pair sums of the dissipating forces and
                                               // torques (only when the law dissipates)

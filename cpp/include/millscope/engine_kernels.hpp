@@ -88,6 +88,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   if (e.buffer_width_ != width || (dissipates && e.dissipative_.size() != 6 * n))
     throw std::logic_error("the engine's pair buffers do not fit its step kernel");
   if (e.list_.builds() == 0) rebuild(e);
+  if constexpr (Lifters) e.lifter_angles_.update(geom, e.theta_);
 
   // Pair forces of the rows [row_split[t], row_split[t+1]) ("own" particles of thread t). The
   // list is a half list (j > i), so every write of thread t goes to a particle at or after its
@@ -124,7 +125,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         const double r_sum = r[i] + r[j];
         const double d2 = dx * dx + dy * dy + dz * dz;
         if (!(d2 < r_sum * r_sum)) {
-          if constexpr (hs > 0) Law::reset(hist);
+          if constexpr (hs > 0) Law::clear(hist);
           continue;
         }
         const double dist = std::sqrt(d2);
@@ -186,7 +187,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     StepPartial& part = partial[static_cast<std::size_t>(t)];
     const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
     const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
-    const double omega = e.omega_, theta = e.theta_;
+    const double omega = e.omega_;
     for (std::size_t i = lo; i < hi; ++i) {
       // pair sums: the owner's, then those buffered by the threads whose rows come before i
       Vec3 f(fx[i], fy[i] - m[i] * gravity, fz[i]);
@@ -210,7 +211,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         }
       }
       const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
-      const drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(geom, theta, xi, r[i]);
+      const drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(geom, e.lifter_angles_, xi, r[i]);
       [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
       [[maybe_unused]] std::int32_t* const lifter_of_slot = &e.wall_lifter_[2 * i];
       [[maybe_unused]] double* const wall_hist =
@@ -401,6 +402,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
 #pragma omp single
       {
         e.theta_ += e.omega_ * dt;
+        if constexpr (Lifters) e.lifter_angles_.update(geom, e.theta_);
         ++e.step_;
         double move2 = 0.0;
         for (const auto& p : partial) move2 = std::max(move2, p.displacement2);

@@ -96,6 +96,9 @@ struct PairConstants {
   // -2 sqrt(5/6) beta >= 0: the viscous coefficient of a spring of stiffness S acting on the
   // equivalent mass m* is gamma = damping_factor sqrt(S m*) (eqs. 2 and 7).
   double damping_factor;
+  // sqrt(S_t / S_n) = sqrt(4 G* / E*): S_t (6) and S_n (4) share sqrt(R* d_n), so the
+  // tangential damping coefficient is gamma_t = gamma_n x this, one square root fewer.
+  double tangential_damping_ratio;
 };
 
 /// E* of a pair: 1/E* = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j.
@@ -124,6 +127,7 @@ inline PairConstants make_pair_constants(const Material& a, const Material& b, d
   p.beta = beta_of_restitution(restitution);
   p.friction = friction;
   p.damping_factor = -2.0 * std::sqrt(5.0 / 6.0) * p.beta;
+  p.tangential_damping_ratio = std::sqrt(4.0 * p.g_star / p.e_star);
   return p;
 }
 
