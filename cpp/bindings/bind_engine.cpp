@@ -61,7 +61,7 @@ void register_engine(py::module_& m) {
       .def(py::init([](std::vector<materials::Material> materials, const InArray& restitution,
                        const InArray& friction, int drum_material, const drum::Geometry& geometry,
                        const InArray& radius, const IntArray& material, double dt, double gravity,
-                       double skin, bool clamp_normal, int threads) {
+                       double skin, bool clamp_normal, int threads, bool reorder) {
              en::Config c;
              c.materials = std::move(materials);
              c.restitution.assign(restitution.data(), restitution.data() + restitution.size());
@@ -76,12 +76,14 @@ void register_engine(py::module_& m) {
              c.gravity = gravity;
              c.skin = skin;
              c.clamp_normal = clamp_normal;
+             c.reorder = reorder;
              c.threads = threads;
              return en::Engine(std::move(c));
            }),
            arg("materials"), arg("restitution"), arg("friction"), arg("drum_material"),
            arg("geometry"), arg("radius"), arg("material"), arg("dt"), arg("gravity") = 9.81,
-           arg("skin") = 0.0, arg("clamp_normal") = false, arg("threads") = 1)
+           arg("skin") = 0.0, arg("clamp_normal") = false, arg("threads") = 1,
+           arg("reorder") = true)
       .def_property_readonly("size", &en::Engine::size)
       .def_property_readonly("dt", &en::Engine::dt)
       .def_property_readonly("threads", &en::Engine::threads)
@@ -139,6 +141,7 @@ void register_engine(py::module_& m) {
            [](const en::Engine& e) {
              en::Engine::Snapshot s = e.snapshot();
              py::dict d;
+             d["order"] = to_numpy(std::move(s.order));
              d["x"] = to_numpy(std::move(s.x));
              d["v"] = to_numpy(std::move(s.v));
              d["w"] = to_numpy(std::move(s.w));
@@ -167,6 +170,7 @@ void register_engine(py::module_& m) {
           "restore",
           [](en::Engine& e, const py::dict& d) {
             en::Engine::Snapshot s;
+            s.order = vector_of<std::uint32_t>(d, "order");
             s.x = vector_of<double>(d, "x");
             s.v = vector_of<double>(d, "v");
             s.w = vector_of<double>(d, "w");

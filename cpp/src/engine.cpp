@@ -139,17 +139,9 @@ Engine::Engine(Config config)
   for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_, &ty_,
                   &tz_, &x_ref_, &y_ref_, &z_ref_})
     v->assign(n_, 0.0);
-  r_ = config_.radius;
-  mat_ = config_.material;
-  m_.resize(n_);
-  inv_m_.resize(n_);
-  inv_i_.resize(n_);
-  for (std::size_t i = 0; i < n_; ++i) {
-    const auto& mat = config_.materials[static_cast<std::size_t>(mat_[i])];
-    m_[i] = materials::sphere_mass(mat.density, r_[i]);
-    inv_m_[i] = 1.0 / m_[i];
-    inv_i_[i] = 1.0 / (0.4 * m_[i] * r_[i] * r_[i]);  // solid sphere, I = 2/5 m r^2
-  }
+  order_.resize(n_);
+  std::iota(order_.begin(), order_.end(), 0u);
+  set_particle_constants();
   wall_history_.assign(friction ? n_ * wall_slots * 3 : 0, 0.0);
   wall_lifter_.assign(2 * n_, -1);
   wall_held_.assign(friction ? n_ : 0, 0);
@@ -160,6 +152,23 @@ Engine::Engine(Config config)
   dissipative_.assign(dissipates ? 6 * n_ : 0, 0.0);
   buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>());
   row_split_.assign(static_cast<std::size_t>(threads_) + 1, 0);
+  buffer_end_.assign(static_cast<std::size_t>(threads_), 0);
+}
+
+void Engine::set_particle_constants() {
+  r_.resize(n_);
+  mat_.resize(n_);
+  m_.resize(n_);
+  inv_m_.resize(n_);
+  inv_i_.resize(n_);
+  for (std::size_t k = 0; k < n_; ++k) {
+    r_[k] = config_.radius[order_[k]];
+    mat_[k] = config_.material[order_[k]];
+    const auto& mat = config_.materials[static_cast<std::size_t>(mat_[k])];
+    m_[k] = materials::sphere_mass(mat.density, r_[k]);
+    inv_m_[k] = 1.0 / m_[k];
+    inv_i_[k] = 1.0 / (0.4 * m_[k] * r_[k] * r_[k]);  // solid sphere, I = 2/5 m r^2
+  }
 }
 
 double Engine::bytes_per_particle() const {
@@ -169,7 +178,7 @@ double Engine::bytes_per_particle() const {
                         &ty_, &tz_, &r_, &m_, &inv_m_, &inv_i_, &x_ref_, &y_ref_, &z_ref_,
                         &wall_history_, &dissipative_})
     total += bytes(*v);
-  total += bytes(mat_) + bytes(wall_lifter_) + bytes(wall_held_);
+  total += bytes(mat_) + bytes(wall_lifter_) + bytes(wall_held_) + bytes(order_);
   for (const auto& b : buffers_) total += bytes(b);
   total += bytes(list_.start()) + bytes(list_.partner()) + bytes(list_.history());
   return total / static_cast<double>(n_);
@@ -183,33 +192,56 @@ void Engine::start_rotation(double omega) {
 }
 
 namespace {
+/// Reads n x 3 values into three arrays; slot k takes row order[k] (or row k without order).
 void copy_in(const double* xyz, std::size_t n, std::vector<double>& a, std::vector<double>& b,
-             std::vector<double>& c, const char* what) {
-  for (std::size_t i = 0; i < n; ++i) {
+             std::vector<double>& c, const char* what, const std::uint32_t* order = nullptr) {
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = order != nullptr ? order[k] : k;
     if (!std::isfinite(xyz[3 * i]) || !std::isfinite(xyz[3 * i + 1]) ||
         !std::isfinite(xyz[3 * i + 2])) {
       throw std::invalid_argument(std::string(what) + "[" + std::to_string(i) +
                                   "] is not finite; every value must be");
     }
-    a[i] = xyz[3 * i];
-    b[i] = xyz[3 * i + 1];
-    c[i] = xyz[3 * i + 2];
+    a[k] = xyz[3 * i];
+    b[k] = xyz[3 * i + 1];
+    c[k] = xyz[3 * i + 2];
   }
 }
+/// Writes three arrays as n x 3 values; slot k goes to row order[k] (or row k without order).
 std::vector<double> copy_out(const std::vector<double>& a, const std::vector<double>& b,
-                             const std::vector<double>& c) {
+                             const std::vector<double>& c, const std::uint32_t* order = nullptr) {
   std::vector<double> out(3 * a.size());
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    out[3 * i] = a[i];
-    out[3 * i + 1] = b[i];
-    out[3 * i + 2] = c[i];
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    const std::size_t i = order != nullptr ? order[k] : k;
+    out[3 * i] = a[k];
+    out[3 * i + 1] = b[k];
+    out[3 * i + 2] = c[k];
   }
   return out;
+}
+/// The values of a per-slot array in the caller's order.
+std::vector<double> in_caller_order(const std::vector<double>& a,
+                                    const std::vector<std::uint32_t>& order) {
+  std::vector<double> out(a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) out[order[k]] = a[k];
+  return out;
+}
+/// a[k] = old a[from[k]] for blocks of `block` values per particle. In place: the step kernel
+/// holds pointers into the arrays across a rebuild.
+template <class T>
+void permute(std::vector<T>& a, const std::vector<std::uint32_t>& from, std::size_t block,
+             std::vector<T>& scratch) {
+  if (a.empty()) return;
+  scratch.resize(a.size());
+  for (std::size_t k = 0; k < from.size(); ++k)
+    std::copy_n(a.begin() + static_cast<std::ptrdiff_t>(from[k] * block), block,
+                scratch.begin() + static_cast<std::ptrdiff_t>(k * block));
+  std::copy(scratch.begin(), scratch.end(), a.begin());
 }
 }  // namespace
 
 void Engine::set_positions(const double* xyz) {
-  copy_in(xyz, n_, x_, y_, z_, "positions");
+  copy_in(xyz, n_, x_, y_, z_, "positions", order_.data());
   // A new configuration: no contact history survives, the list is built afresh.
   list_ = neighbors::VerletList(list_.skin(), list_.history_size(),
                                 config_.geometry.end_walls ? 0.0 : config_.geometry.length);
@@ -219,16 +251,18 @@ void Engine::set_positions(const double* xyz) {
   forces_valid_ = false;
 }
 void Engine::set_velocities(const double* v) {
-  copy_in(v, n_, vx_, vy_, vz_, "velocities");
+  copy_in(v, n_, vx_, vy_, vz_, "velocities", order_.data());
   forces_valid_ = false;
 }
 void Engine::set_spins(const double* w) {
-  copy_in(w, n_, wx_, wy_, wz_, "spins");
+  copy_in(w, n_, wx_, wy_, wz_, "spins", order_.data());
   forces_valid_ = false;
 }
-std::vector<double> Engine::positions() const { return copy_out(x_, y_, z_); }
-std::vector<double> Engine::velocities() const { return copy_out(vx_, vy_, vz_); }
-std::vector<double> Engine::spins() const { return copy_out(wx_, wy_, wz_); }
+std::vector<double> Engine::positions() const { return copy_out(x_, y_, z_, order_.data()); }
+std::vector<double> Engine::velocities() const { return copy_out(vx_, vy_, vz_, order_.data()); }
+std::vector<double> Engine::spins() const { return copy_out(wx_, wy_, wz_, order_.data()); }
+std::vector<double> Engine::radius() const { return in_caller_order(r_, order_); }
+std::vector<double> Engine::mass() const { return in_caller_order(m_, order_); }
 
 void Engine::advance(long steps) {
   if (steps < 0) invalid("steps", static_cast<double>(steps), ">= 0");
@@ -333,11 +367,11 @@ namespace {
 /// Visits every touching contact: f(pair constants, overlap, R*, smaller radius, history or null).
 template <class F>
 void for_each_contact(const Engine& e, const materials::PairTable& table, const Config& c,
+                      const std::vector<double>& r, const std::vector<int>& mat,
                       const std::vector<double>& x, const std::vector<double>& y,
                       const std::vector<double>& z, const neighbors::VerletList& list,
                       const std::vector<double>& wall_history,
                       const std::vector<std::int32_t>& wall_lifter, F&& f) {
-  const auto& r = e.radius();
   const std::size_t hs = list.history_size();
   const double period = c.geometry.length;
   const bool listed = list.start().size() == e.size() + 1;  // not before the first build
@@ -349,7 +383,7 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
       const double dist = std::sqrt((x[i] - x[j]) * (x[i] - x[j]) + (y[i] - y[j]) * (y[i] - y[j]) + dz * dz);
       const double d_n = r[i] + r[j] - dist;
       if (d_n <= 0.0) continue;
-      const auto& p = table(static_cast<std::size_t>(c.material[i]), static_cast<std::size_t>(c.material[j]));
+      const auto& p = table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(mat[j]));
       f(p, d_n, r[i] * r[j] / (r[i] + r[j]), std::min(r[i], r[j]),
         hs > 0 ? list.history().data() + s * hs : nullptr);
     }
@@ -362,7 +396,7 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
         if (wc.part == drum::Part::lifter) slot = wall_lifter[2 * i] == wc.index ? 3 : 4;
         hist = wall_history.data() + (i * wall_slots + slot) * 3;
       }
-      const auto& p = table(static_cast<std::size_t>(c.material[i]), static_cast<std::size_t>(c.drum_material));
+      const auto& p = table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(c.drum_material));
       f(p, wc.overlap, r[i], r[i], hist);
     }
   }
@@ -372,7 +406,7 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
 double Engine::elastic_energy() const {
   double u = 0.0;
   const bool friction = has_friction(variant_);
-  for_each_contact(*this, pairs_, config_, x_, y_, z_, list_, wall_history_, wall_lifter_,
+  for_each_contact(*this, pairs_, config_, r_, mat_, x_, y_, z_, list_, wall_history_, wall_lifter_,
                    [&](const materials::PairConstants& p, double d_n, double r_star, double,
                        const double* hist) {
                      const double sqrt_rd = std::sqrt(r_star * d_n);
@@ -384,7 +418,7 @@ double Engine::elastic_energy() const {
 
 double Engine::max_overlap_ratio() const {
   double worst = 0.0;
-  for_each_contact(*this, pairs_, config_, x_, y_, z_, list_, wall_history_, wall_lifter_,
+  for_each_contact(*this, pairs_, config_, r_, mat_, x_, y_, z_, list_, wall_history_, wall_lifter_,
                    [&](const materials::PairConstants&, double d_n, double, double r_small,
                        const double*) { worst = std::max(worst, d_n / r_small); });
   return worst;
@@ -392,9 +426,10 @@ double Engine::max_overlap_ratio() const {
 
 Engine::Snapshot Engine::snapshot() const {
   Snapshot s;
-  s.x = positions();
-  s.v = velocities();
-  s.w = spins();
+  s.order = order_;
+  s.x = copy_out(x_, y_, z_);
+  s.v = copy_out(vx_, vy_, vz_);
+  s.w = copy_out(wx_, wy_, wz_);
   s.f = copy_out(fx_, fy_, fz_);
   s.t = copy_out(tx_, ty_, tz_);
   s.x_ref = copy_out(x_ref_, y_ref_, z_ref_);
@@ -425,7 +460,18 @@ void Engine::restore(const Snapshot& s) {
   require(s.wall_history.size() == wall_history_.size(), "wall history size");
   require(s.wall_lifter.size() == wall_lifter_.size(), "wall lifter slots size");
   require(s.step >= 0, "step < 0");
+  require(s.order.size() == n_, "order has " + std::to_string(s.order.size()) + " entries, not " +
+                                    std::to_string(n_));
+  {
+    std::vector<bool> seen(n_, false);
+    for (const std::uint32_t k : s.order) {
+      require(k < n_ && !seen[k], "order is not a permutation of the particles");
+      seen[k] = true;
+    }
+  }
   list_.restore(n_, s.list_start, s.list_partner, s.list_history, s.list_builds);
+  order_ = s.order;
+  set_particle_constants();
   copy_in(s.x.data(), n_, x_, y_, z_, "positions");
   copy_in(s.v.data(), n_, vx_, vy_, vz_, "velocities");
   copy_in(s.w.data(), n_, wx_, wy_, wz_, "spins");
@@ -457,7 +503,29 @@ void Engine::restore(const Snapshot& s) {
 }
 
 void Engine::Access::rebuild(Engine& e) {
-  e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_);
+  if (!e.config_.reorder) {
+    e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_);
+  } else {
+    // Re-store the particles in cell order, then build: the list's history follows the
+    // permutation. Forces and torques move too (the next half kick uses them); the pair
+    // buffers and the dissipative sums are rewritten by every pair pass.
+    const std::vector<std::uint32_t> from =
+        e.list_.spatial_order(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_);
+    std::vector<double> scratch;
+    for (auto* a : {&e.x_, &e.y_, &e.z_, &e.vx_, &e.vy_, &e.vz_, &e.wx_, &e.wy_, &e.wz_, &e.fx_,
+                    &e.fy_, &e.fz_, &e.tx_, &e.ty_, &e.tz_, &e.r_, &e.m_, &e.inv_m_, &e.inv_i_})
+      permute(*a, from, 1, scratch);
+    permute(e.wall_history_, from, wall_slots * 3, scratch);
+    std::vector<int> scratch_int;
+    permute(e.mat_, from, 1, scratch_int);
+    std::vector<std::int32_t> scratch_i32;
+    permute(e.wall_lifter_, from, 2, scratch_i32);
+    std::vector<std::uint8_t> scratch_u8;
+    permute(e.wall_held_, from, 1, scratch_u8);
+    std::vector<std::uint32_t> scratch_u32;
+    permute(e.order_, from, 1, scratch_u32);
+    e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_, from.data());
+  }
   e.x_ref_ = e.x_;
   e.y_ref_ = e.y_;
   e.z_ref_ = e.z_;
@@ -477,9 +545,16 @@ void Engine::Access::split_rows(Engine& e) {
     while (row < e.n_ && static_cast<double>(start[row]) < goal) ++row;
     e.row_split_[t] = row;
   }
-  // Thread t buffers what its rows give the particles after them.
-  for (std::size_t t = 0; t < team; ++t)
-    e.buffers_[t].resize(e.buffer_width_ * (e.n_ - e.row_split_[t + 1]));
+  // Thread t buffers what its rows give the particles after them, up to its last partner.
+  const auto& partner = e.list_.partner();
+  for (std::size_t t = 0; t < team; ++t) {
+    const std::size_t own_end = e.row_split_[t + 1];
+    std::size_t end = own_end;
+    for (std::size_t i = e.row_split_[t]; i < own_end; ++i)
+      if (start[i + 1] > start[i]) end = std::max<std::size_t>(end, partner[start[i + 1] - 1] + 1u);
+    e.buffer_end_[t] = end;
+    e.buffers_[t].resize(e.buffer_width_ * (end - own_end));
+  }
 }
 
 std::string Engine::Access::describe_bad(const Engine& e, std::size_t i) {
@@ -487,7 +562,7 @@ std::string Engine::Access::describe_bad(const Engine& e, std::size_t i) {
   msg.precision(6);
   const double rho = std::hypot(e.x_[i], e.y_[i]);
   msg << "the simulation stopped at step " << e.step_ << " (t = " << e.time() << " s): particle "
-      << i << " (radius " << e.r_[i] << " m, material " << e.mat_[i] << ") ";
+      << e.order_[i] << " (radius " << e.r_[i] << " m, material " << e.mat_[i] << ") ";
   const double values[] = {e.x_[i], e.y_[i], e.z_[i], e.vx_[i], e.vy_[i], e.vz_[i],
                            e.fx_[i], e.fy_[i], e.fz_[i]};
   const bool finite = std::all_of(std::begin(values), std::end(values),

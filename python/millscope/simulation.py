@@ -55,7 +55,7 @@ from .scene import Scene
 
 __all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation"]
 
-CHECKPOINT_FORMAT = "millscope-checkpoint-2"  # 2: the ledger holds "dissipated"
+CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"; 3: "order"
 _FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
 _FILL_JITTER = 0.02  # random offset of a site, in diameters, each axis
 _WALL_GAP = 0.05  # clearance of a placed particle from the drum, in its diameters

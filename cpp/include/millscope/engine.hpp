@@ -18,6 +18,13 @@
 // are template parameters of the step kernel, chosen once when the engine is made
 // (engine_kernels.hpp, instantiated in src/engine_*.cpp).
 //
+// Storage order: at every neighbour-list build the particles are re-stored in cell order
+// (neighbors::VerletList::spatial_order; Config::reorder), so that contacting particles sit
+// close in memory. order_ maps storage slots to the caller's particle indices; everything that
+// goes in or out (positions, velocities, spins, radius, mass, messages) is in the caller's
+// order. Reordering changes the order of floating-point sums, so a run differs from an
+// unsorted one by round-off; it stays reproducible bit for bit at a given thread count.
+//
 // Threads: one OpenMP team runs a whole call of advance(); pair forces go to per-thread buffers
 // (half neighbour list, no atomics) that are summed in a fixed order, so a run is reproducible
 // bit for bit at a given thread count.
@@ -47,6 +54,7 @@ struct Config {
   double gravity = 9.81;            // m/s^2, acting along -y
   double skin = 0.0;                // m; 0: a default of 0.1 x the smallest radius... see Engine
   bool clamp_normal = false;        // F_n = max(F_n, 0)
+  bool reorder = true;              // store the particles in cell order at each list build
   int threads = 1;
 };
 
@@ -152,8 +160,8 @@ class Engine {
   std::vector<double> positions() const;
   std::vector<double> velocities() const;
   std::vector<double> spins() const;
-  const std::vector<double>& radius() const { return r_; }
-  const std::vector<double>& mass() const { return m_; }
+  std::vector<double> radius() const;  // per particle, m
+  std::vector<double> mass() const;    // per particle, kg
 
   // ---- running
   /// Advances `steps` steps.
@@ -176,6 +184,8 @@ class Engine {
 
   // ---- checkpoint: every array and scalar needed to continue bit for bit
   struct Snapshot {
+    // Arrays in storage order; order[k] is the caller's index of the particle in slot k.
+    std::vector<std::uint32_t> order;
     std::vector<double> x, v, w, f, t;  // n x 3 each
     std::vector<double> x_ref;          // n x 3, positions at the last list build
     std::vector<double> wall_history;   // n x wall_slots x 3
@@ -197,6 +207,7 @@ class Engine {
  private:
   friend struct Access;
   void check_state(const char* where) const;
+  void set_particle_constants();  // r_, mat_, m_, inv_m_, inv_i_ from config_ in order_
 
   Config config_;
   std::size_t n_;
@@ -215,13 +226,16 @@ class Engine {
   std::vector<double> x_ref_, y_ref_, z_ref_;
   std::vector<double> wall_history_;          // n x wall_slots x 3 (friction only)
   std::vector<std::int32_t> wall_lifter_;     // n x 2: lifter index of each lifter slot, -1 free
+  std::vector<std::uint32_t> order_;          // n: the caller's index of the particle in slot k
   std::vector<std::uint8_t> wall_held_;       // n: bit s set while wall slot s holds a contact
   drum::LifterAngles lifter_angles_;          // the lifters at theta_ (kept in step by the kernel)
   std::size_t buffer_width_ = 6;               // sums per particle, see buffer_width()
   std::vector<double> dissipative_;           // 6 x n: pair sums of the dissipating forces and
                                               // torques (only when the law dissipates)
-  std::vector<std::vector<double>> buffers_;  // per thread t: buffer_width x (n - row_split[t+1])
-                                              // sums for the particles after its rows
+  std::vector<std::vector<double>> buffers_;  // per thread t: buffer_width x
+                                              // (buffer_end[t] - row_split[t+1]) sums for the
+                                              // particles after its rows that they touch
+  std::vector<std::size_t> buffer_end_;       // per thread: 1 + the last partner of its rows
   std::vector<std::size_t> row_split_;        // threads + 1 row boundaries balancing pairs
 
   long step_ = 0;

@@ -47,6 +47,9 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   constexpr bool dissipates = Law::dissipates;
   constexpr std::size_t width = buffer_width<Law>();  // per-thread buffer, x n doubles
   static_assert(!friction || hs == 3, "the wall history slots hold 3 doubles per contact");
+  static_assert(hs == 0 || hs == 3,
+                "the pair history is the tangential spring alone, odd under swapping the pair "
+                "(neighbors::VerletList negates it when a reorder swaps the pair's ranks)");
 
   const std::size_t n = e.n_;
   const int team = e.threads_;
@@ -94,12 +97,13 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // list is a half list (j > i), so every write of thread t goes to a particle at or after its
   // first row: own particles are summed straight into the shared arrays (forces into fx.., the
   // dissipating parts into e.dissipative_), later ones into thread t's buffer, which holds only
-  // the particles after its rows. No two threads write the same place.
+  // the particles after its rows up to its last partner (buffer_end). No two threads write the
+  // same place.
   double* const dissip = e.dissipative_.data();
   auto pair_pass = [&](int t, double history_dt) {
     const std::size_t row_begin = e.row_split_[static_cast<std::size_t>(t)];
     const std::size_t own_end = e.row_split_[static_cast<std::size_t>(t) + 1];
-    const std::size_t later = n - own_end;  // particles in this thread's buffer
+    const std::size_t later = e.buffer_end_[static_cast<std::size_t>(t)] - own_end;  // buffered
     double* const buf = e.buffers_[static_cast<std::size_t>(t)].data();
     std::fill(buf, buf + width * later, 0.0);
     // quantity c of particle k: own[c][k] for k < own_end, buffered[c][k - own_end] after
@@ -190,6 +194,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     const double omega = e.omega_;
     for (std::size_t i = lo; i < hi; ++i) {
       // pair sums: the owner's, then those buffered by the threads whose rows come before i
+      // and reach it
       Vec3 f(fx[i], fy[i] - m[i] * gravity, fz[i]);
       Vec3 tq = friction ? Vec3(tx[i], ty[i], tz[i]) : Vec3(0.0, 0.0, 0.0);
       [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
@@ -200,7 +205,9 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       for (int b = 0; b < team; ++b) {
         const std::size_t own_end = e.row_split_[static_cast<std::size_t>(b) + 1];
         if (i < own_end) break;  // row_split grows with b
-        const std::size_t later = n - own_end, k = i - own_end;
+        const std::size_t end = e.buffer_end_[static_cast<std::size_t>(b)];
+        if (i >= end) continue;
+        const std::size_t later = end - own_end, k = i - own_end;
         const double* const buf = e.buffers_[static_cast<std::size_t>(b)].data();
         f += Vec3(buf[k], buf[later + k], buf[2 * later + k]);
         if constexpr (friction) tq += Vec3(buf[3 * later + k], buf[4 * later + k], buf[5 * later + k]);

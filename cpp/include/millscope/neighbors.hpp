@@ -9,6 +9,14 @@
 // Rebuilding is O(N) for a bounded density: particles are binned into cubic cells at least
 // 2 r_max + skin wide, and each cell looks at itself and its 26 neighbours.
 // Optionally periodic along z with period `period_z` (minimum image).
+//
+// spatial_order() gives the order of the particles cell by cell, the axis with the most cells
+// slowest: stored in that order, the partners of a particle sit close to it in memory, and the
+// partners of a block of rows fall within a short range of indices after the block (what the
+// engine's per-thread pair buffers hold). build() takes the permutation the caller applied
+// since the last build, so the history follows the pairs. A pair's history is that of its row
+// particle relative to its partner (the tangential spring of contact.hpp is odd: swapping the
+// two negates it), so a pair whose two particles swap ranks has its history negated.
 #pragma once
 
 #include <algorithm>
@@ -38,9 +46,19 @@ class VerletList {
       fail("period_z", period_z, ">= 0 (0: not periodic)");
   }
 
+  /// The particles in cell order: order[k] is the index of the k-th particle when they are
+  /// sorted by cell, the axis with the most cells slowest, then the next; stable within a cell.
+  std::vector<std::uint32_t> spatial_order(const double* x, const double* y, const double* z,
+                                           const double* r, std::size_t n) {
+    bin(x, y, z, r, n);
+    return cell_particles_;
+  }
+
   /// Rebuilds the list for n spheres (centres x, y, z, radii r), keeping the history of pairs
-  /// that stay listed.
-  void build(const double* x, const double* y, const double* z, const double* r, std::size_t n) {
+  /// that stay listed. `moved`, when given, says where each particle came from since the last
+  /// build: the particle now at index k was at index moved[k] (a permutation of 0..n-1).
+  void build(const double* x, const double* y, const double* z, const double* r, std::size_t n,
+             const std::uint32_t* moved = nullptr) {
     std::vector<std::uint32_t> old_start = std::move(start_);
     std::vector<std::uint32_t> old_partner = std::move(partner_);
     std::vector<double> old_history = std::move(history_);
@@ -84,15 +102,20 @@ class VerletList {
     history_.assign(partner_.size() * history_size_, 0.0);
     if (history_size_ > 0 && old_start.size() == n + 1) {
       for (std::size_t i = 0; i < n; ++i) {
-        const auto first = old_partner.begin() + old_start[i];
-        const auto last = old_partner.begin() + old_start[i + 1];
+        const std::uint32_t old_i = moved != nullptr ? moved[i] : static_cast<std::uint32_t>(i);
         for (std::uint32_t s = start_[i]; s < start_[i + 1]; ++s) {
-          const auto it = std::lower_bound(first, last, partner_[s]);
-          if (it == last || *it != partner_[s]) continue;
+          // The pair's old slot: in the row of its lower old index (a half list).
+          std::uint32_t row = old_i, other = moved != nullptr ? moved[partner_[s]] : partner_[s];
+          const bool swapped = other < row;
+          if (swapped) std::swap(row, other);
+          const auto first = old_partner.begin() + old_start[row];
+          const auto last = old_partner.begin() + old_start[row + 1];
+          const auto it = std::lower_bound(first, last, other);
+          if (it == last || *it != other) continue;
           const auto old_slot = static_cast<std::size_t>(it - old_partner.begin());
-          std::copy_n(old_history.begin() + static_cast<std::ptrdiff_t>(old_slot * history_size_),
-                      history_size_,
-                      history_.begin() + static_cast<std::ptrdiff_t>(s * history_size_));
+          const double sign = swapped ? -1.0 : 1.0;
+          for (std::size_t h = 0; h < history_size_; ++h)
+            history_[s * history_size_ + h] = sign * old_history[old_slot * history_size_ + h];
         }
       }
     }
@@ -150,10 +173,15 @@ class VerletList {
     return std::clamp(k, 0, dims_[axis] - 1);
   }
 
+  // Cells are numbered with the axis of most cells slowest (axes_[0]), so that the cell order
+  // cuts the charge into the thinnest slabs (spatial_order()).
   std::size_t index(int kx, int ky, int kz) const {
-    return (static_cast<std::size_t>(kz) * static_cast<std::size_t>(dims_[1]) +
-            static_cast<std::size_t>(ky)) * static_cast<std::size_t>(dims_[0]) +
-           static_cast<std::size_t>(kx);
+    const int k[3] = {kx, ky, kz};
+    const auto slow = static_cast<std::size_t>(k[axes_[0]]);
+    const auto mid = static_cast<std::size_t>(k[axes_[1]]);
+    const auto fast = static_cast<std::size_t>(k[axes_[2]]);
+    return (slow * static_cast<std::size_t>(dims_[axes_[1]]) + mid) *
+               static_cast<std::size_t>(dims_[axes_[2]]) + fast;
   }
 
   // Counting sort of the particles into cells.
@@ -180,6 +208,10 @@ class VerletList {
       dims_[a] = std::max(1, static_cast<int>(std::floor(extent / min_cell)));
       cell_size_[a] = std::max(extent / dims_[a], min_cell);
     }
+    axes_[0] = 0;
+    axes_[1] = 1;
+    axes_[2] = 2;
+    std::stable_sort(axes_, axes_ + 3, [this](int a, int b) { return dims_[a] > dims_[b]; });
     // With fewer than 3 cells along a periodic axis, neighbouring cells would be seen twice;
     // the unique() in build() removes the duplicates.
     const std::size_t cells = static_cast<std::size_t>(dims_[0]) * static_cast<std::size_t>(dims_[1]) *
@@ -205,6 +237,7 @@ class VerletList {
   double lo_[3] = {0, 0, 0};
   double cell_size_[3] = {1, 1, 1};
   int dims_[3] = {1, 1, 1};
+  int axes_[3] = {2, 1, 0};  // slowest to fastest in the cell numbering
   std::vector<std::uint32_t> cell_start_, cell_particles_;
   std::vector<std::uint32_t> start_, partner_;
   std::vector<double> history_;
