@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from millscope.presets import SCALES, case_name, paper_cases, pilot_mill
+from millscope.presets import SCALES, axial_slice, case_name, paper_cases, pilot_mill
 from millscope.scene import Scene
 
 TABLE5_COUNTS = [4062, 8124, 12186, 16248, 20310, 24372, 28434]  # Table 5, as printed
@@ -296,3 +296,46 @@ def test_paper_cases_refuses_bad_arguments(kwargs: dict[str, Any], pattern: str)
 def test_pilot_mill_refuses_bad_arguments(kwargs: dict[str, Any], pattern: str) -> None:
     with pytest.raises(ValueError, match=pattern):
         pilot_mill(**kwargs)
+
+
+# -- axial slices (benchmarks) ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("n", [392, 10_000, 200_000])
+def test_axial_slice_holds_n_balls_at_the_papers_filling(n: int) -> None:
+    paper = pilot_mill(0.71, None, scale="paper")
+    s = axial_slice(n, "paper")
+    assert s.n_particles == n and s.drum.end_walls is False
+    assert s.drum.length == pytest.approx(0.315 * n / 2466, rel=1e-12)
+    # ball volume over drum volume: the paper's 2466 balls in 0.88 m x 0.315 m
+    filling = n * math.pi / 6 * 0.025**3 / (math.pi * 0.44**2 * s.drum.length)
+    assert filling == pytest.approx(2466 * math.pi / 6 * 0.025**3 / (math.pi * 0.44**2 * 0.315))
+    assert (s.drum.diameter, s.drum.lifters, s.materials, s.pairs, s.speed_fraction) == (
+        paper.drum.diameter,
+        paper.drum.lifters,
+        paper.materials,
+        paper.pairs,
+        0.71,
+    )
+    assert s.name == f"balls-MS slice {n}"
+
+
+def test_axial_slice_takes_the_stiffness_of_its_scale() -> None:
+    small = pilot_mill(0.71, None, scale="small")
+    s = axial_slice(392, "small")
+    assert s.materials == small.materials and s.pairs == small.pairs
+    assert s.drum.length == pytest.approx(small.drum.length, rel=2e-3)
+    assert axial_slice(392, "tiny").materials[0].shear_modulus == pytest.approx(81e6)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        ((391, "paper"), "n_particles = 391 is not valid; it must be an integer >= 392"),
+        ((1000.0, "paper"), "n_particles = 1000.0 is not valid"),
+        ((1000, "huge"), "scale = 'huge' is not valid"),
+    ],
+)
+def test_axial_slice_refuses_bad_arguments(args: tuple[object, str], message: str) -> None:
+    with pytest.raises(ValueError, match=re.escape(message)):
+        axial_slice(*args)  # type: ignore[arg-type]

@@ -1,6 +1,7 @@
 """Command line: ``python -m millscope`` and the ``millscope`` script.
 
-Subcommands: ``info`` (build facts), ``analyze`` (one torque file), ``demo`` (the main job).
+Subcommands: ``info`` (build facts), ``analyze`` (one torque file), ``demo`` (the main job),
+``bench`` (engine throughput, :mod:`millscope.bench`).
 Bad input ends with one line ``millscope: error: ...`` on stderr and exit code 2.
 """
 
@@ -113,6 +114,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Engine throughput on the pilot mill (millscope.bench)."""
+    from .bench import run_from_args
+
+    return run_from_args(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="millscope",
@@ -151,6 +159,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="out", help="output folder (default out)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_demo)
+
+    from .bench import add_arguments as add_bench_arguments
+
+    p = sub.add_parser("bench", help="engine throughput on the pilot mill (particle-steps/s)",
+                       description="Times the DEM engine on the pilot mill from a cached "
+                                   "tumbling state: particle-steps per second, ns per "
+                                   "particle-step and bytes per particle per scene and thread "
+                                   "count; the last line is particle_steps_per_s=<value>.")
+    add_bench_arguments(p)
+    p.set_defaults(func=cmd_bench)
     return parser
 
 

@@ -1,7 +1,8 @@
 """The paper's pilot mill and its case matrix (paper Tables 1-5; DESIGN.md section 3).
 
 :func:`pilot_mill` builds one case, :func:`paper_cases` the Table 4 x Table 5 matrix or part
-of it. Case names follow the paper (:func:`case_name`): HD/LD (steel-like/ceramic-like
+of it, :func:`axial_slice` a periodic slice of the balls-only mill with a given ball count (for
+benchmarks). Case names follow the paper (:func:`case_name`): HD/LD (steel-like/ceramic-like
 particles), HS/MS/LS (80/71/62 % of critical), #1..#7 (load level), e.g. ``"LDMS#3"``;
 ``"balls-MS"`` for balls only; other speeds as a percentage, e.g. ``"LD-75%#2"``.
 
@@ -18,6 +19,7 @@ Scales (:data:`SCALES` says exactly what each changes):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -35,6 +37,8 @@ __all__ = [
     "PARTICLES_PER_LEVEL",
     "PARTICLE_DIAMETER",
     "SCALES",
+    "SLICE_MIN_BALLS",
+    "axial_slice",
     "case_name",
     "paper_cases",
     "pilot_mill",
@@ -67,6 +71,9 @@ SMALL_LENGTH = 0.05  # m: an axial slice two ball diameters long, periodic ends
 SMALL_STIFFNESS = 0.01  # "small": every shear modulus x this (Rayleigh time x 10)
 TINY_STIFFNESS = 0.001  # "tiny": every shear modulus x this (Rayleigh time x 31.6)
 SOFT_STIFFNESS = 0.001  # "soft": every shear modulus x this
+# axial_slice: the fewest balls, so that the slice is >= 2 ball diameters long (Scene's rule
+# for periodic ends) at the paper's 2466 balls per 0.315 m
+SLICE_MIN_BALLS = math.ceil(2.0 * BALL_DIAMETER * BALL_COUNT / DRUM_LENGTH)
 
 
 @dataclass(frozen=True)
@@ -239,7 +246,68 @@ def pilot_mill(
             "particles='ceramic' or 'steel'"
         )
     speed = _speed(speed_fraction, "speed_fraction")
-    sc = _SCALES[scale]
+    return _build(speed, kind, level, _SCALES[scale], particle_diameter, ball_diameter)
+
+
+def axial_slice(n_particles: int, scale: str = "paper", speed_fraction: float = 0.71) -> Scene:
+    """The balls-only pilot mill as a periodic axial slice holding ``n_particles`` balls.
+
+    The slice is built exactly as the ``"small"`` scale builds its slice (periodic ends, no end
+    walls, the ball count scaled with the length), but its length is chosen so that
+    ``n_particles`` balls of 25 mm sit at the paper's filling: 2466 balls per 0.315 m of drum,
+    so the length is 0.315 m x n_particles / 2466 (0.05 m hold 391 balls, 1.277 m hold
+    10 000). Everything across the axis (drum diameter, lifters, materials, restitution,
+    friction) is the paper's. For the linear-cost check of the engine: the work per
+    particle-step should not grow with the particle count.
+
+    Parameters
+    ----------
+    n_particles : int
+        Number of balls, >= 392 (the slice must be at least two ball diameters, 0.05 m, long
+        so that a ball meets at most one periodic image of another).
+    scale : {"paper", "small", "tiny", "soft"}
+        Sets only the stiffness: every shear modulus x 1 ("paper"), x 0.01 ("small") or
+        x 0.001 ("tiny", "soft"); see :data:`SCALES`. The length is always the one above.
+    speed_fraction : float
+        Rotation speed as a fraction of critical (ball convention), in (0, 3].
+
+    Returns
+    -------
+    Scene
+        Named ``"balls-MS slice N"`` (the case code, then the ball count).
+    """
+    if not isinstance(scale, str) or scale not in _SCALES:
+        raise ValueError(
+            f"scale = {scale!r} is not valid; it must be one of "
+            f"{', '.join(repr(k) for k in _SCALES)}"
+        )
+    if (
+        not isinstance(n_particles, Integral)
+        or isinstance(n_particles, bool)
+        or n_particles < SLICE_MIN_BALLS
+    ):
+        raise ValueError(
+            f"n_particles = {n_particles!r} is not valid; it must be an integer >= "
+            f"{SLICE_MIN_BALLS} "
+            f"(a periodic slice at least two ball diameters, {2 * BALL_DIAMETER:g} m, long)"
+        )
+    speed = _speed(speed_fraction, "speed_fraction")
+    length = DRUM_LENGTH * int(n_particles) / BALL_COUNT
+    sc = dataclasses.replace(_SCALES[scale], length=length, end_walls=False)
+    scene = _build(speed, None, 1, sc, PARTICLE_DIAMETER, BALL_DIAMETER)
+    return dataclasses.replace(scene, name=f"{scene.name} slice {n_particles}")
+
+
+def _build(
+    speed: float,
+    kind: str | None,
+    level: int,
+    sc: _Scale,
+    particle_diameter: float,
+    ball_diameter: float,
+) -> Scene:
+    """The pilot mill at a scale: drum length and ends from ``sc``, counts scaled with the
+    length, every shear modulus x ``sc.stiffness``. Arguments are already validated."""
     share = sc.length / DRUM_LENGTH
 
     steel = STEEL.with_shear_modulus(sc.stiffness)

@@ -1,0 +1,187 @@
+"""The throughput bench (millscope.bench, ``python -m millscope bench``) at tiny scale.
+
+No timing is asserted: only that what the bench reports agrees with what the engine itself
+counts (steps, memory) and with the rest of its own output (table, ratios, final line).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import millscope as ms
+from millscope import bench, presets
+from millscope.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+SPIN_UP = "0.05"  # s of rotation before timing: enough for a tumbling state at tiny scale
+FLOAT = r"[-+0-9.eE]+"
+ROW = re.compile(rf"^(\S+)\s+(\d+)\s+(\d+)\s+({FLOAT})\s+(\d+)\s+({FLOAT})\s+({FLOAT})\s+"
+                 rf"({FLOAT})\s+(\d+)$")
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Tumbling tiny-scale states of the scenes the tests time, prepared once on one thread
+    (several threads on a busy 2-core machine make the preparation many times slower)."""
+    folder = tmp_path_factory.mktemp("bench-cache")
+    for name in ("balls", "frictionless", "slice-392", "slice-784"):
+        bench.tumbling_state(name, "tiny", float(SPIN_UP), cache_dir=folder, threads=1,
+                             progress=False, out=io.StringIO())
+    return folder
+
+
+def _rows(text: str) -> dict[tuple[str, int], dict[str, float]]:
+    rows = {}
+    for line in text.splitlines():
+        m = ROW.match(line)
+        if m:
+            name, particles, threads, dt, steps, wall, psps, ns, nbytes = m.groups()
+            rows[name, int(threads)] = {
+                "particles": int(particles), "dt": float(dt), "steps": int(steps),
+                "wall": float(wall), "psps": float(psps), "ns": float(ns), "bytes": int(nbytes)}
+    return rows
+
+
+def _bench(cache: Path, *extra: str) -> list[str]:
+    return ["bench", "--scale", "tiny", "--spin-up", SPIN_UP, "--cache-dir", str(cache),
+            "--no-progress", *extra]
+
+
+# -- the measurement against the engine's own counters ----------------------------------------
+
+@pytest.mark.parametrize("steps", [200, 333])
+def test_particle_steps_are_the_engines_steps_times_particles(cache: Path, steps: int) -> None:
+    path = bench.tumbling_state("balls", "tiny", float(SPIN_UP), cache_dir=cache)
+    sim = ms.Simulation.load(path, threads=1)
+    before = sim._engine.step_count
+    m = bench.measure(sim, steps, "balls")
+    taken = sim._engine.step_count - before
+    assert m.steps == taken
+    assert m.particle_steps == sim.scene.n_particles * taken == 391 * taken
+    assert steps <= taken <= math.ceil(1.01 * steps) + 1  # whole samples: at most 1 % more
+    assert m.particle_steps_per_s == pytest.approx(391 * taken / m.wall_s, rel=1e-12)
+    assert m.ns_per_particle_step * m.particle_steps_per_s == pytest.approx(1e9, rel=1e-12)
+    assert (m.particles, m.threads, m.dt) == (391, 1, sim.dt)
+
+
+def test_bytes_per_particle_is_the_engines_report(cache: Path) -> None:
+    path = bench.tumbling_state("balls", "tiny", float(SPIN_UP), cache_dir=cache)
+    sim = ms.Simulation.load(path, threads=1)
+    m = bench.measure(sim, 100)
+    assert m.bytes_per_particle == sim._engine.bytes_per_particle
+    # the engine holds at least the state a checkpoint saves: positions, velocities, spins,
+    # forces, torques, reference positions and the contact histories, all float64
+    state = sim._engine.snapshot()
+    floats = sum(v.nbytes for v in state.values()
+                 if isinstance(v, np.ndarray) and v.dtype == np.float64)
+    assert m.bytes_per_particle >= floats / 391 >= 6 * 3 * 8
+
+
+def test_measure_refuses_a_simulation_at_rest_and_too_few_steps() -> None:
+    sim = ms.Simulation(presets.pilot_mill(0.71, None, scale="tiny"), threads=1)
+    with pytest.raises(ValueError, match="rotating drum"):
+        bench.measure(sim, 100)
+    with pytest.raises(ValueError, match="steps = 1 is not valid"):
+        bench.measure(sim, 1)
+
+
+# -- the command line -------------------------------------------------------------------------
+
+def test_cli_table_ratios_and_final_line_agree(cache: Path, capsys) -> None:
+    # few steps: two threads on a busy 2-core machine can be very slow (no timing is checked)
+    code = main(_bench(cache, "--scenes", "balls", "frictionless", "--threads", "1", "2",
+                       "--steps", "20"))
+    text = capsys.readouterr().out
+    assert code == 0
+    rows = _rows(text)
+    assert set(rows) == {(s, t) for s in ("balls", "frictionless") for t in (1, 2)}
+    dt = ms.Simulation(presets.pilot_mill(0.71, None, scale="tiny")).dt
+    for r in rows.values():
+        assert r["particles"] == 391 and r["dt"] == pytest.approx(dt, rel=1e-3)
+        assert r["steps"] == 20  # 20 samples of one step each
+        assert r["ns"] * r["psps"] == pytest.approx(1e9, rel=2e-3)
+        assert r["bytes"] > 6 * 3 * 8
+    assert "prepared" not in text  # every state came from the cache
+    ratio = float(re.search(rf"balls: 2 threads / 1 thread\(s\) = ({FLOAT})x", text)[1])
+    assert ratio == pytest.approx(rows["balls", 2]["psps"] / rows["balls", 1]["psps"], rel=0.01)
+    for t in (1, 2):
+        line = re.search(rf"frictionless vs balls, {t} thread\(s\): ({FLOAT})x", text)
+        assert float(line[1]) == pytest.approx(
+            rows["frictionless", t]["psps"] / rows["balls", t]["psps"], rel=0.01)
+    last = text.rstrip().splitlines()[-1]
+    assert re.fullmatch(rf"particle_steps_per_s={FLOAT}", last)
+    assert float(last.split("=")[1]) == pytest.approx(rows["balls", 2]["psps"], rel=1e-3)
+
+
+def test_cli_slice_sizes_report_the_cost_spread(cache: Path, capsys) -> None:
+    code = main(_bench(cache, "--slice-sizes", "392", "784", "--threads", "1", "--steps", "100"))
+    text = capsys.readouterr().out
+    assert code == 0
+    rows = _rows(text)
+    assert [k for k in rows] == [("slice-392", 1), ("slice-784", 1)]
+    assert [r["particles"] for r in rows.values()] == [392, 784]
+    line = re.search(rf"slice, 1 thread\(s\): ns/p-step by particles 392: ({FLOAT}), "
+                     rf"784: ({FLOAT}); max/min = ({FLOAT})", text)
+    assert line is not None
+    ns = [float(line[1]), float(line[2])]
+    assert ns == pytest.approx([rows["slice-392", 1]["ns"], rows["slice-784", 1]["ns"]],
+                               abs=0.051)
+    assert float(line[3]) == pytest.approx(max(ns) / min(ns), rel=1e-3)
+    last = text.rstrip().splitlines()[-1]
+    assert float(last.split("=")[1]) == pytest.approx(rows["slice-392", 1]["psps"], rel=1e-3)
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--steps", "1"], "--steps: '1' is not valid; it must be >= 2"),
+        (["--threads", "1", "0"], "--threads: '0' is not valid; it must be >= 1"),
+        (["--spin-up", "0.001"], "--spin-up: '0.001' is not valid; it must be finite and >= 0.02"),
+        (["--dt", "0"], "--dt: '0' is not valid; it must be finite and > 0 s"),
+        (["--slice-sizes", "100"], "--slice-sizes: '100' is not valid; it must be >= 392"),
+        (["--scenes", "mill"], "--scenes: invalid choice: 'mill'"),
+        (["--scale", "huge"], "--scale: invalid choice: 'huge'"),
+    ],
+)
+def test_bad_options_exit_2_naming_the_option(tmp_path: Path, capsys, extra: list[str],
+                                              message: str) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(_bench(tmp_path, *extra))
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())  # nothing was prepared
+
+
+def test_unstable_dt_is_one_line_with_the_limit(tmp_path: Path, capsys) -> None:
+    assert main(_bench(tmp_path, "--dt", "1e-3", "--scenes", "balls")) == 2
+    err = capsys.readouterr().err
+    limit = 0.5 * presets.pilot_mill(0.71, None, scale="tiny").min_rayleigh_time()[0]
+    assert err.startswith("millscope: error: --dt = 0.001 s is not valid; it must be in (0, ")
+    assert f"{limit:.6g}] s" in err and err.count("\n") == 1
+    assert not list(tmp_path.iterdir())
+
+
+def test_throughput_script_is_the_same_bench(cache: Path) -> None:
+    script = [sys.executable, str(ROOT / "benchmarks" / "throughput.py")]
+    run = subprocess.run([*script, *_bench(cache, "--scenes", "balls", "--threads", "1",
+                                           "--steps", "50")[1:]],
+                         capture_output=True, text=True, check=True)
+    rows = _rows(run.stdout)
+    assert list(rows) == [("balls", 1)]
+    assert run.stdout.rstrip().splitlines()[-1].startswith("particle_steps_per_s=")
+
+
+def test_throughput_main_refuses_bad_options(capsys) -> None:
+    with pytest.raises(SystemExit) as exc:
+        bench.main(["--threads", "0"], prog="throughput.py")
+    assert exc.value.code == 2
+    assert "throughput.py: error: argument --threads: '0' is not valid" in capsys.readouterr().err
