@@ -6,8 +6,9 @@ The public API (DESIGN.md section 5) is re-exported here; submodules hold the de
 from importlib import import_module as _import_module
 from typing import Any as _Any
 
-from . import contact, drivetrain, presets
+from . import campaign, contact, drivetrain, presets
 from ._core import build_info as _build_info
+from .campaign import Campaign, Case, CaseResult, RunSettings
 from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
 from .record import RecordError, TorqueRecord
 from .scene import Drum, Fraction, Lifters, Material, Pair, Scene
@@ -36,6 +37,9 @@ def __getattr__(name: str) -> _Any:
 
 __all__ = [
     "Calibration",
+    "Campaign",
+    "Case",
+    "CaseResult",
     "CheckpointError",
     "Drum",
     "Fraction",
@@ -49,11 +53,13 @@ __all__ = [
     "LogFit",
     "Peak",
     "RecordError",
+    "RunSettings",
     "SpectralEnergy",
     "Spectrum",
     "TorqueRecord",
     "__version__",
     "band_stop",
+    "campaign",
     "contact",
     "drivetrain",
     "estimate_fill",

@@ -1,0 +1,959 @@
+"""Campaigns: many cases run through an executor into a resumable result store.
+
+A **case** (:class:`Case`) is a :class:`~millscope.scene.Scene` plus how to run it
+(:class:`RunSettings`: seed, duration, warm-up, sampling, threads, time step, settling). A
+:class:`Campaign` runs its cases through any ``concurrent.futures``-style executor (a local
+process pool by default, or a ``dask.distributed`` Client) and keeps the results in a store
+directory::
+
+    store/
+      manifest.json          every case: hash, name, status, file, wall time, error
+      cases/<hash>.npz       a finished case: its TorqueRecord (record.py's .npz format), the
+                             case and how it ran in meta["campaign"]
+      cases/<hash>.failed.json   a case that raised: the error and a traceback summary
+      .lock                  held (flock) while a campaign runs on the store
+
+``<hash>`` is :meth:`Case.hash`: the sha256 of the canonical JSON of the case (scene,
+settings, :data:`CASE_FORMAT`), the same in every process and on every machine, different as
+soon as anything in the scene or the settings differs.
+
+Every file is written atomically (a temporary file, then a rename), and only the process that
+called :meth:`Campaign.run` writes: workers return their record, so a dask cluster needs no
+shared file system. The files are the truth; the manifest is rebuilt from them at every start,
+so a campaign killed at any point resumes where it stopped and keeps every case whose file was
+written. A rerun skips finished cases and retries failed ones; a case that raises is recorded
+as failed and the others go on. Ctrl-C stops the campaign, keeping what has finished.
+
+Typical use (DESIGN.md section 5)::
+
+    scenes = ms.presets.paper_cases(particles=["ceramic"], speed_fractions=[0.71],
+                                    load_levels=[1, 2, 3, 4], scale="paper")
+    camp = ms.Campaign(scenes, store="runs/demo", duration=14.0, block=(4.0, 14.0))
+    results = camp.run()                  # or camp.run(executor=dask_client)
+    [(r.scene.name, r.mean_torque, r.lth_amplitude, r.energy) for r in results]
+
+All quantities are SI (s, N m, Hz, (N m)^2 s).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import json
+import math
+import os
+import signal
+import socket
+import time
+import traceback
+import zipfile
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from numbers import Integral
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from . import _core
+from ._files import atomic_write, read_json
+from .analysis import analyze_block
+from .contact import DEFAULT_DT_FRACTION, MAX_DT_FRACTION
+from .presets import paper_cases
+from .record import RecordError, TorqueRecord
+from .scene import Scene, _choice, _fail, _positive, _real
+from .simulation import Simulation, _available_cores
+from .spectral import spectral_energy
+
+__all__ = [
+    "CASE_FORMAT",
+    "MANIFEST_FORMAT",
+    "Campaign",
+    "Case",
+    "CaseResult",
+    "RunSettings",
+    "case_matrix",
+    "paper_matrix",
+    "read_manifest",
+    "run_case",
+]
+
+CASE_FORMAT = "millscope-case-1"  # part of every case hash: bump it when results change meaning
+MANIFEST_FORMAT = "millscope-campaign-1"
+SAMPLINGS = ("instant", "mean")
+_MIN_BLOCK_SAMPLES = 4  # the spectral analysis needs at least this many
+_TRACEBACK_FRAMES = 12  # frames kept in a failed case's traceback summary (the innermost)
+_TRACEBACK_CHARS = 8000
+_TERMINATE_WAIT_S = 10.0  # how long to wait for a terminated worker process to end, s
+
+Status = Literal["done", "failed", "pending"]
+
+
+# -- cases -------------------------------------------------------------------------------------
+
+
+def _integer(where: str, value: object, lowest: int) -> int:
+    if not isinstance(value, Integral) or isinstance(value, (bool, np.bool_)) or value < lowest:
+        raise _fail(where, value, f"an integer >= {lowest}")
+    return int(value)
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """How one case is run (everything but the scene). Validated on construction.
+
+    Attributes
+    ----------
+    seed : int
+        Seed of the filling, >= 0 (:class:`~millscope.simulation.Simulation`).
+    duration_s : float
+        Simulated time after the drum starts, s, > 0: the record ends here (record time 0 is
+        the start of rotation). Rounded to whole samples.
+    warm_up_s : float
+        The first ``warm_up_s`` s of rotation are simulated but not kept, s, in
+        [0, duration_s); at least 2 samples must remain. 0 keeps the whole run.
+    sample_dt : float
+        Sampling interval, s, > 0 (and >= the time step); 0.01 s in the paper.
+    sampling : {"instant", "mean"}
+        Instantaneous torque at each sample time (as the paper) or the mean over the interval.
+    threads : int
+        OpenMP threads of the engine for this case, >= 1. Runs are bit-for-bit reproducible
+        at a given thread count, so it is part of the case.
+    dt : float or None
+        Time step, s; None: 0.2 x the smallest Rayleigh time of the scene.
+    settle_tolerance : float
+        The charge counts as settled when 99 % of the particles have a kinetic energy below
+        this x m g d (dimensionless, > 0).
+    settle_min_s, settle_max_s : float
+        Least and most simulated settling time before rotation, s, > 0.
+    """
+
+    seed: int = 0
+    duration_s: float = 14.0
+    warm_up_s: float = 0.0
+    sample_dt: float = 0.01
+    sampling: str = "instant"
+    threads: int = 1
+    dt: float | None = None
+    settle_tolerance: float = 1e-4
+    settle_min_s: float = 0.2
+    settle_max_s: float = 3.0
+
+    def __post_init__(self) -> None:
+        values: dict[str, Any] = {
+            "seed": _integer("RunSettings.seed", self.seed, 0),
+            "duration_s": _positive("RunSettings.duration_s", self.duration_s, "s"),
+            "sample_dt": _positive("RunSettings.sample_dt", self.sample_dt, "s"),
+            "sampling": _choice("RunSettings.sampling", self.sampling, SAMPLINGS),
+            "threads": _integer("RunSettings.threads", self.threads, 1),
+            "dt": None if self.dt is None else _positive("RunSettings.dt", self.dt, "s"),
+            "settle_tolerance": _positive("RunSettings.settle_tolerance", self.settle_tolerance),
+            "settle_min_s": _positive("RunSettings.settle_min_s", self.settle_min_s, "s"),
+            "settle_max_s": _positive("RunSettings.settle_max_s", self.settle_max_s, "s"),
+        }
+        warm = _real("RunSettings.warm_up_s", self.warm_up_s, "s", ">= 0")
+        if not 0.0 <= warm < values["duration_s"]:
+            raise _fail("RunSettings.warm_up_s", self.warm_up_s,
+                        f"in [0, duration_s = {values['duration_s']:g}) s", "s")
+        values["warm_up_s"] = warm
+        if values["settle_max_s"] < values["settle_min_s"]:
+            raise _fail("RunSettings.settle_max_s", self.settle_max_s,
+                        f">= settle_min_s = {values['settle_min_s']:g} s", "s")
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+        if self.total_samples < 2:
+            raise _fail("RunSettings.duration_s", self.duration_s,
+                        f"at least 2 samples of sample_dt = {self.sample_dt:g} s", "s")
+        if self.total_samples - self.warm_up_samples < 2:
+            raise _fail("RunSettings.warm_up_s", self.warm_up_s,
+                        f"at most duration_s - 2 x sample_dt = "
+                        f"{self.duration_s - 2 * self.sample_dt:g} s, so that 2 samples remain",
+                        "s")
+
+    @property
+    def total_samples(self) -> int:
+        """Samples simulated after the drum starts, warm-up included."""
+        return int(round(self.duration_s / self.sample_dt))
+
+    @property
+    def warm_up_samples(self) -> int:
+        """Samples of the warm-up, dropped from the record."""
+        return int(round(self.warm_up_s / self.sample_dt))
+
+    def replace(self, **changes: Any) -> RunSettings:
+        """A copy with some fields changed, validated again."""
+        return dataclasses.replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One run of a campaign: a scene and its settings.
+
+    Attributes
+    ----------
+    scene : Scene
+    settings : RunSettings
+
+    Raises
+    ------
+    ValueError
+        when the settings do not suit the scene: a time step above the stability limit, or a
+        sampling interval shorter than the time step.
+    """
+
+    scene: Scene
+    settings: RunSettings = field(default_factory=RunSettings)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scene, Scene):
+            raise _fail("Case.scene", self.scene, "a millscope Scene")
+        if not isinstance(self.settings, RunSettings):
+            raise _fail("Case.settings", self.settings, "a RunSettings")
+        t_rayleigh, which = self.scene.min_rayleigh_time()
+        s = self.settings
+        if s.dt is not None and s.dt > MAX_DT_FRACTION * t_rayleigh:
+            raise _fail("RunSettings.dt", s.dt,
+                        f"in (0, {MAX_DT_FRACTION * t_rayleigh:.6g}] s, {MAX_DT_FRACTION} x the "
+                        f"Rayleigh time of the fraction {which!r} of scene "
+                        f"{self.scene.name or 'scene'!r}", "s")
+        dt = DEFAULT_DT_FRACTION * t_rayleigh if s.dt is None else s.dt
+        if s.sample_dt < dt:
+            raise _fail("RunSettings.sample_dt", s.sample_dt,
+                        f">= the time step dt = {dt:.6g} s of scene {self.scene.name or 'scene'!r}",
+                        "s")
+
+    @property
+    def name(self) -> str:
+        """The scene's name and the seed, e.g. ``"LDMS#3 seed 0"``."""
+        return f"{self.scene.name or 'scene'} seed {self.settings.seed}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able data: ``{"format": CASE_FORMAT, "scene": {...}, "settings": {...}}``."""
+        return {"format": CASE_FORMAT, "scene": self.scene.to_dict(),
+                "settings": dataclasses.asdict(self.settings)}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Case:
+        """The case of a :meth:`to_dict` dict, validated (ValueError when damaged)."""
+        if not isinstance(data, Mapping) or data.get("format") != CASE_FORMAT:
+            found = data.get("format") if isinstance(data, Mapping) else type(data).__name__
+            raise ValueError(f"not a millscope case: format {found!r}, expected {CASE_FORMAT!r}")
+        settings = data.get("settings")
+        if not isinstance(settings, Mapping):
+            raise ValueError(f"case settings must be a mapping, not {type(settings).__name__}")
+        known = {f.name for f in dataclasses.fields(RunSettings)}
+        unknown = sorted(set(settings) - known)
+        if unknown:
+            raise ValueError(f"case settings have unknown keys {unknown}; known: {sorted(known)}")
+        return cls(Scene.from_dict(data.get("scene")), RunSettings(**settings))  # type: ignore[arg-type]
+
+    def canonical_json(self) -> str:
+        """The JSON the hash is taken of: sorted keys, no spaces, floats as Python repr."""
+        return json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"),
+                          ensure_ascii=True, allow_nan=False)
+
+    def hash(self) -> str:
+        """sha256 (64 hex digits) of :meth:`canonical_json`: the case's name in a store."""
+        return hashlib.sha256(self.canonical_json().encode("ascii")).hexdigest()
+
+
+def case_matrix(scenes: Iterable[Scene], *, seeds: int | Iterable[int] | None = None,
+                settings: RunSettings | None = None, **changes: Any) -> list[Case]:
+    """Every scene with every seed, run with ``settings`` (changed by ``changes``).
+
+    Parameters
+    ----------
+    scenes : iterable of Scene
+        E.g. :func:`millscope.presets.paper_cases`; any list of scenes.
+    seeds : int or iterable of int, optional
+        Filling seeds, >= 0; several seeds give the seed-to-seed spread of each scene.
+        Default: the seed of ``settings``.
+    settings : RunSettings, optional
+        Default ``RunSettings()``; its seed is replaced by each of ``seeds``.
+    **changes
+        RunSettings fields to change, e.g. ``duration_s=3.0, threads=2``.
+
+    Returns
+    -------
+    list of Case
+        Ordered by scene, then seed.
+    """
+    scene_list = list(scenes)
+    for k, scene in enumerate(scene_list):
+        if not isinstance(scene, Scene):
+            raise _fail(f"scenes[{k}]", scene, "a millscope Scene")
+    if settings is not None and not isinstance(settings, RunSettings):
+        raise _fail("settings", settings, "a RunSettings or None")
+    base = (settings or RunSettings()).replace(**changes)
+    seed_list = [base.seed] if seeds is None else _seeds(seeds)
+    return [Case(scene, base.replace(seed=seed)) for scene in scene_list for seed in seed_list]
+
+
+def paper_matrix(particles: str | None | Iterable[str | None] = ("ceramic", "steel"),
+                 speed_fractions: float | Iterable[float] = (0.80, 0.71, 0.62),
+                 load_levels: int | Iterable[int] = range(1, 8), scale: str = "paper", *,
+                 seeds: int | Iterable[int] | None = None,
+                 settings: RunSettings | None = None, **changes: Any) -> list[Case]:
+    """The paper's Table 4 x Table 5 matrix (or part of it) as cases.
+
+    :func:`millscope.presets.paper_cases` (particles x speeds x load levels at ``scale``)
+    through :func:`case_matrix`.
+
+    Parameters
+    ----------
+    particles : "ceramic", "steel", None or an iterable of them
+        LD, HD or balls-only cases.
+    speed_fractions : float or iterable of float
+        Fractions of critical speed (the paper's: 0.80, 0.71, 0.62).
+    load_levels : int or iterable of int
+        Table 5's levels 1..7.
+    scale : {"paper", "small", "tiny", "soft"}
+        See :data:`millscope.presets.SCALES`.
+    seeds, settings, **changes
+        As :func:`case_matrix`.
+    """
+    return case_matrix(paper_cases(particles, speed_fractions, load_levels, scale), seeds=seeds,
+                       settings=settings, **changes)
+
+
+def _seeds(seeds: object) -> list[int]:
+    items = [seeds] if isinstance(seeds, Integral) else seeds
+    if isinstance(items, (str, bytes)) or not isinstance(items, Iterable):
+        raise _fail("seeds", seeds, "an integer >= 0 or an iterable of them")
+    out = [_integer("seeds", s, 0) for s in items]
+    if not out:
+        raise _fail("seeds", seeds, "an integer >= 0 or a non-empty iterable of them")
+    if len(set(out)) != len(out):
+        raise _fail("seeds", seeds, "free of repeats")
+    return out
+
+
+# -- results -----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    """One case of a campaign as the store holds it, with the analysis of its block.
+
+    Attributes
+    ----------
+    case : Case
+    hash : str
+        :meth:`Case.hash`, the case's file name in the store.
+    status : {"done", "failed", "pending"}
+    record : TorqueRecord or None
+        The drive torque after the warm-up (times from the start of rotation, s; N m); None
+        unless done. ``record.meta["campaign"]`` says how and where the case ran.
+    wall_time_s : float
+        Wall-clock time the case took in its worker, s (nan when pending).
+    error, traceback : str or None
+        Why a failed case failed: ``"Type: message"`` and a summary of the traceback.
+    mean_torque : float
+        Mean drive torque over the campaign's block, N m (nan without a record or a block).
+    lth_hz, lth_amplitude : float
+        The lifter torque harmonic located near lifters x rotation frequency in the block, Hz
+        and N m (nan without lifters).
+    energy : float
+        Spectral energy of the block with the mean and the LTH removed, (N m)^2 s, eq. (11).
+    energy_relative_std : float
+        Its sampling spread (standard deviation / mean, dimensionless).
+    """
+
+    case: Case
+    hash: str
+    status: Status
+    record: TorqueRecord | None = None
+    wall_time_s: float = math.nan
+    error: str | None = None
+    traceback: str | None = None
+    mean_torque: float = math.nan
+    lth_hz: float = math.nan
+    lth_amplitude: float = math.nan
+    energy: float = math.nan
+    energy_relative_std: float = math.nan
+
+    @property
+    def scene(self) -> Scene:
+        return self.case.scene
+
+    @property
+    def ok(self) -> bool:
+        """True when the case is done."""
+        return self.status == "done"
+
+
+# -- the store ---------------------------------------------------------------------------------
+
+
+def _case_path(store: Path, digest: str) -> Path:
+    return store / "cases" / f"{digest}.npz"
+
+
+def _failure_path(store: Path, digest: str) -> Path:
+    return store / "cases" / f"{digest}.failed.json"
+
+
+def _read_done(path: Path) -> dict[str, Any] | None:
+    """The ``meta["campaign"]`` of a finished case's file, or None when the file is not a
+    whole, consistent case file: readable samples (the zip's checksums hold) and a stored case
+    that hashes to the file's name."""
+    try:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta_json"]))
+            if data["time_s"].shape != data["torque_Nm"].shape:
+                return None
+        info = meta["campaign"]
+        if Case.from_dict(info["case"]).hash() != path.stem:
+            return None
+    except (OSError, KeyError, TypeError, ValueError, EOFError, zipfile.BadZipFile):
+        return None
+    return info if isinstance(info, dict) else None
+
+
+def _read_failed(path: Path) -> dict[str, Any] | None:
+    try:
+        info = read_json(path, "failed case")
+        if Case.from_dict(info["case"]).hash() != path.name.split(".")[0]:
+            return None
+    except (KeyError, TypeError, ValueError):
+        return None
+    return info if isinstance(info, dict) else None
+
+
+def _scan(store: Path) -> dict[str, dict[str, Any]]:
+    """Manifest entries of every case file in ``store``: a finished case's file wins over a
+    failure of the same case."""
+    entries: dict[str, dict[str, Any]] = {}
+    folder = store / "cases"
+    if not folder.is_dir():
+        return entries
+    for path in sorted(folder.glob("*.failed.json")):
+        info = _read_failed(path)
+        if info is not None:
+            entries[path.name.split(".")[0]] = _entry(info, "failed", path, store)
+    for path in sorted(folder.glob("*.npz")):
+        info = _read_done(path)
+        if info is not None:
+            entries[path.stem] = _entry(info, "done", path, store)
+    return entries
+
+
+def _entry(info: Mapping[str, Any], status: Status, path: Path | None,
+           store: Path) -> dict[str, Any]:
+    case = info["case"]
+    settings = case["settings"]
+    return {
+        "hash": info["hash"],
+        "name": case["scene"].get("name", ""),
+        "seed": settings["seed"],
+        "status": status,
+        "file": None if path is None else path.relative_to(store).as_posix(),
+        "wall_time_s": info.get("wall_time_s"),
+        "error": info.get("error"),
+        "traceback": info.get("traceback"),
+    }
+
+
+def read_manifest(store: str | os.PathLike[str]) -> dict[str, Any]:
+    """The manifest of a store as written by :meth:`Campaign.run` (it may be stale after a
+    kill; the next run rebuilds it from the case files)."""
+    path = Path(store) / "manifest.json"
+    data = read_json(path, "campaign manifest")
+    if not isinstance(data, dict) or data.get("format") != MANIFEST_FORMAT:
+        raise ValueError(f"{path}: not a millscope campaign manifest (expected format "
+                         f"{MANIFEST_FORMAT!r})")
+    return data
+
+
+def _write_manifest(store: Path, entries: Mapping[str, Mapping[str, Any]]) -> None:
+    counts = {s: sum(1 for e in entries.values() if e["status"] == s)
+              for s in ("done", "failed", "pending")}
+    data = {
+        "format": MANIFEST_FORMAT,
+        "millscope_version": _core.build_info()["version"],
+        "updated": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "counts": counts,
+        "cases": list(entries.values()),
+    }
+    with atomic_write(store / "manifest.json", "w") as fh:
+        json.dump(data, fh, indent=1)
+        fh.write("\n")
+
+
+@contextlib.contextmanager
+def _locked(store: Path) -> Iterator[None]:
+    """Holds an exclusive flock on ``store/.lock`` (released by the OS if the process dies)."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield
+        return
+    with open(store / ".lock", "a+") as fh:
+        try:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise RuntimeError(f"the store {store} is in use by another campaign; run one "
+                               "campaign per store at a time") from None
+        try:
+            yield
+        finally:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_UN)
+
+
+def _remove_temporaries(store: Path) -> None:
+    """Deletes what atomic writes of a killed campaign left (``.<name>.<random>.tmp``)."""
+    for folder in (store, store / "cases"):
+        if folder.is_dir():
+            for tmp in folder.glob(".*.tmp"):
+                with contextlib.suppress(FileNotFoundError):
+                    tmp.unlink()
+
+
+# -- the worker side ---------------------------------------------------------------------------
+
+
+def _ignore_sigint() -> None:
+    """Pool initializer: idle workers ignore Ctrl-C (the campaign handles it); a running
+    simulation still stops on it, and its case is then reported as failed."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _traceback_summary(exc: BaseException) -> str:
+    text = "".join(traceback.TracebackException.from_exception(
+        exc, limit=-_TRACEBACK_FRAMES).format())
+    return text if len(text) <= _TRACEBACK_CHARS else "...\n" + text[-_TRACEBACK_CHARS:]
+
+
+def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
+    """Runs one case where it is called (a worker); never raises for a failing case.
+
+    Parameters
+    ----------
+    case : mapping
+        :meth:`Case.to_dict` (plain data, so any executor can ship it).
+
+    Returns
+    -------
+    dict
+        ``status`` "done" with ``time_s``, ``torque_Nm`` (arrays: s, N m) and ``meta``, or
+        "failed" with ``error`` and ``traceback``; always ``hash``, ``wall_time_s`` (s),
+        ``host`` and ``pid``.
+    """
+    start = time.perf_counter()
+    where = {"host": socket.gethostname(), "pid": os.getpid()}
+    digest = ""
+    try:
+        c = Case.from_dict(case)
+        digest = c.hash()
+        s = c.settings
+        sim = Simulation(c.scene, seed=s.seed, dt=s.dt, threads=s.threads,
+                         settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
+                         settle_max_s=s.settle_max_s)
+        rec = sim.run(s.total_samples * s.sample_dt, sample_dt=s.sample_dt,
+                      sampling=s.sampling,  # type: ignore[arg-type]  # checked by RunSettings
+                      progress=False)
+        if rec.meta.get("interrupted") or len(rec) != s.total_samples:
+            raise RuntimeError(f"the run was interrupted after {len(rec)} of "
+                               f"{s.total_samples} samples")
+        settle = sim.settle_report
+        meta = rec.meta
+        meta["settle"] = None if settle is None else dataclasses.asdict(settle)
+        return {"status": "done", "hash": digest, "time_s": rec.time_s[s.warm_up_samples:],
+                "torque_Nm": rec.torque_Nm[s.warm_up_samples:], "meta": meta,
+                "wall_time_s": time.perf_counter() - start, **where}
+    except Exception as exc:  # a failing case is reported, not raised
+        return {"status": "failed", "hash": digest, "error": f"{type(exc).__name__}: {exc}",
+                "traceback": _traceback_summary(exc),
+                "wall_time_s": time.perf_counter() - start, **where}
+
+
+# -- the campaign ------------------------------------------------------------------------------
+
+
+def _terminate_workers(pool: Any) -> None:
+    """Stops the processes of our own pool at once (Ctrl-C, or an error in the campaign):
+    their cases are lost either way, and a queued case would otherwise start and run to its
+    end. ``terminate_workers`` is public from Python 3.14; before, the pool's process table."""
+    terminate = getattr(pool, "terminate_workers", None)
+    if callable(terminate):
+        terminate()
+        return
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.terminate()
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.join(_TERMINATE_WAIT_S)
+
+
+def _is_dask_client(executor: object) -> bool:
+    return type(executor).__module__.split(".")[0] == "distributed"
+
+
+def _completed(executor: object, futures: list[Any]) -> Iterator[Any]:
+    """Futures as they finish: dask's ``as_completed`` for a dask Client, else
+    ``concurrent.futures.as_completed``."""
+    if _is_dask_client(executor):
+        from distributed import as_completed as dask_as_completed
+
+        return iter(dask_as_completed(futures))
+    from concurrent.futures import as_completed
+
+    return as_completed(futures)
+
+
+class Campaign:
+    """Cases run through an executor into a resumable result store.
+
+    Parameters
+    ----------
+    cases : iterable of Scene or Case
+        Scenes are run with the settings below (one case per scene and seed); cases keep
+        their own settings. :func:`millscope.presets.paper_cases` gives the paper's scenes,
+        :func:`paper_matrix` and :func:`case_matrix` give cases.
+    store : str or path
+        Result directory (created on the first run); see the module docstring.
+    duration : float, optional
+        Simulated time after the drum starts, s, for the scenes; default
+        ``settings.duration_s`` (14 s).
+    block : (float, float) or None
+        The block ``t1 <= t < t2`` (s from the start of rotation) the results are analysed
+        over: mean torque, LTH and spectral energy. It must lie within every case's kept
+        record, [warm_up_s, duration_s], and hold at least 4 samples. None: no analysis.
+    seeds : int or iterable of int, optional
+        Filling seeds for the scenes, >= 0 (default: the seed of ``settings``, 0).
+    settings : RunSettings, optional
+        Settings for the scenes (default ``RunSettings()``); ``duration`` and ``seeds``
+        override its duration and seed.
+    bandwidth : float
+        Full width of the bands removed around the mean and the LTH, Hz.
+    window : {"hann", "hann_periodic", "rectangular"}
+        Window of the spectral analysis.
+
+    Raises
+    ------
+    ValueError
+        for any bad argument, naming it with its value and valid range, before any work:
+        also for two equal cases, a block outside a record or an LTH above the Nyquist
+        frequency.
+    """
+
+    def __init__(self, cases: Iterable[Scene | Case], store: str | os.PathLike[str], *,
+                 duration: float | None = None,
+                 block: tuple[float, float] | None = (4.0, 14.0),
+                 seeds: int | Iterable[int] | None = None,
+                 settings: RunSettings | None = None, bandwidth: float = 0.3,
+                 window: str = "hann") -> None:
+        if settings is not None and not isinstance(settings, RunSettings):
+            raise _fail("settings", settings, "a RunSettings or None")
+        base = settings or RunSettings()
+        if duration is not None:
+            base = base.replace(duration_s=_positive("duration", duration, "s"))
+        seed_list = [base.seed] if seeds is None else _seeds(seeds)
+        if isinstance(cases, (Scene, Case, str, bytes)) or not isinstance(cases, Iterable):
+            raise _fail("cases", cases, "an iterable of Scene or Case")
+        out: list[Case] = []
+        for k, item in enumerate(cases):
+            if isinstance(item, Case):
+                out.append(item)
+            elif isinstance(item, Scene):
+                out.extend(Case(item, base.replace(seed=s)) for s in seed_list)
+            else:
+                raise _fail(f"cases[{k}]", item, "a Scene or a Case")
+        if not out:
+            raise _fail("cases", cases, "a non-empty iterable of Scene or Case")
+        self._cases = tuple(out)
+        self._hashes = tuple(c.hash() for c in out)
+        first: dict[str, int] = {}
+        for k, digest in enumerate(self._hashes):
+            if digest in first:
+                raise ValueError(f"cases[{first[digest]}] and cases[{k}] are the same case "
+                                 f"({out[k].name}, hash {digest[:12]}); every case must differ "
+                                 "in its scene or settings (give other seeds for repeats)")
+            first[digest] = k
+
+        path = Path(store)
+        if path.exists() and not path.is_dir():
+            raise _fail("store", str(store), "a directory (or a path to create one)")
+        self._store = path
+        self._bandwidth = _positive("bandwidth", bandwidth, "Hz")
+        self._window = _choice("window", window, ("hann", "hann_periodic", "rectangular"))
+        self._block = None if block is None else self._check_block(block)
+
+    def _check_block(self, block: object) -> tuple[float, float]:
+        if (isinstance(block, (str, bytes)) or not isinstance(block, Iterable)
+                or len(pair := tuple(block)) != 2):
+            raise _fail("block", block, "a pair (t1, t2) of times in s, or None")
+        t1 = _real("block[0]", pair[0], "s", ">= 0")
+        t2 = _real("block[1]", pair[1], "s", "> block[0]")
+        if not t1 < t2:
+            raise _fail("block", block, "(t1, t2) with t1 < t2 (s)")
+        for k, c in enumerate(self._cases):
+            s = c.settings
+            eps = 1e-9 * s.sample_dt
+            if t1 < s.warm_up_s - eps or t2 > s.duration_s + eps:
+                raise _fail("block", block,
+                            f"within the record of cases[{k}] ({c.name}), [warm_up_s, "
+                            f"duration_s] = [{s.warm_up_s:g}, {s.duration_s:g}] s")
+            if (t2 - t1) / s.sample_dt < _MIN_BLOCK_SAMPLES - 1e-9:
+                raise _fail("block", block,
+                            f"at least {_MIN_BLOCK_SAMPLES} samples long, "
+                            f"{_MIN_BLOCK_SAMPLES * s.sample_dt:g} s at the sample_dt of "
+                            f"cases[{k}] ({c.name})")
+            lifters = c.scene.drum.lifters
+            if lifters is not None:
+                lth = lifters.count * c.scene.rotation_hz
+                if lth >= 0.5 / s.sample_dt:
+                    raise _fail(f"cases[{k}] ({c.name}) RunSettings.sample_dt", s.sample_dt,
+                                f"< {0.5 / lth:.6g} s so that the LTH at {lth:.4g} Hz lies "
+                                "below the Nyquist frequency", "s")
+        return (t1, t2)
+
+    # -- facts ---------------------------------------------------------------------------------
+    @property
+    def cases(self) -> tuple[Case, ...]:
+        return self._cases
+
+    @property
+    def hashes(self) -> tuple[str, ...]:
+        """:meth:`Case.hash` of every case, in order."""
+        return self._hashes
+
+    @property
+    def store(self) -> Path:
+        return self._store
+
+    @property
+    def block(self) -> tuple[float, float] | None:
+        """The analysed block (t1, t2), s, or None."""
+        return self._block
+
+    def __len__(self) -> int:
+        return len(self._cases)
+
+    def __repr__(self) -> str:
+        return f"Campaign({len(self)} cases, store={str(self._store)!r})"
+
+    def case_file(self, case: int) -> Path:
+        """Where case number ``case`` is (or will be) stored once finished."""
+        return _case_path(self._store, self._hashes[case])
+
+    # -- running -------------------------------------------------------------------------------
+    def run(self, executor: Any = None, *, max_workers: int | None = None,
+            progress: bool = True, retry_failed: bool = True) -> list[CaseResult]:
+        """Runs every case not yet finished in the store, then returns all results.
+
+        Parameters
+        ----------
+        executor : None, concurrent.futures.Executor or dask.distributed.Client
+            None: a local process pool (spawned processes) of ``max_workers`` processes.
+            Anything with ``submit(fn, *args)`` returning futures works; for a dask Client,
+            ``distributed.as_completed`` collects them. Its workers must import millscope;
+            with threads per case > 1, give each worker process that many cores.
+        max_workers : int, optional
+            Processes of the local pool; default the cores this process may use divided by
+            the largest ``threads`` of the cases left to run. ``max_workers`` x threads may
+            not exceed the cores. Only with ``executor=None``.
+        progress : bool
+            Show a tqdm bar over the cases.
+        retry_failed : bool
+            Run cases that failed before again (else they keep their failure).
+
+        Returns
+        -------
+        list of CaseResult
+            One per case, in order (:meth:`results`).
+
+        Raises
+        ------
+        ValueError
+            for bad arguments, before anything runs.
+        RuntimeError
+            when another campaign holds the store.
+        KeyboardInterrupt
+            on Ctrl-C, after cancelling what had not started and writing the manifest;
+            finished cases are kept.
+        """
+        own_pool = executor is None
+        if not own_pool:
+            if not callable(getattr(executor, "submit", None)):
+                raise _fail("executor", executor, "None, a concurrent.futures Executor or a "
+                            "dask.distributed Client (an object with submit())")
+            if max_workers is not None:
+                raise _fail("max_workers", max_workers,
+                            "None when an executor is given (it applies to the local pool)")
+        cores = _available_cores()
+        if max_workers is not None:
+            _integer("max_workers", max_workers, 1)
+        if own_pool:
+            threads = max(c.settings.threads for c in self._cases)
+            if threads > cores:
+                raise _fail("RunSettings.threads", threads,
+                            f"<= {cores}, the cores this process may use, for the local "
+                            "pool (pass an executor to run elsewhere)")
+            if max_workers is not None and max_workers * threads > cores:
+                raise _fail("max_workers", max_workers,
+                            f"<= {cores // threads}: max_workers x threads per case "
+                            f"({threads}) may not exceed the {cores} cores")
+
+        self._store.mkdir(parents=True, exist_ok=True)
+        (self._store / "cases").mkdir(exist_ok=True)
+        with _locked(self._store):
+            _remove_temporaries(self._store)
+            entries = self._entries(_scan(self._store))
+            todo = [k for k, d in enumerate(self._hashes)
+                    if entries[d]["status"] == "pending"
+                    or (retry_failed and entries[d]["status"] == "failed")]
+            _write_manifest(self._store, entries)
+            if todo:
+                self._execute(todo, entries, executor, max_workers, cores, progress)
+        return self.results()
+
+    def _entries(self, on_disk: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
+        """This campaign's cases (in order) with their status on disk, then any other cases
+        the store holds."""
+        entries: dict[str, dict[str, Any]] = {}
+        for c, digest in zip(self._cases, self._hashes, strict=True):
+            entries[digest] = on_disk.pop(digest, None) or {
+                "hash": digest, "name": c.scene.name, "seed": c.settings.seed,
+                "status": "pending", "file": None, "wall_time_s": None, "error": None,
+                "traceback": None}
+        entries.update(on_disk)
+        return entries
+
+    def _execute(self, todo: list[int], entries: dict[str, dict[str, Any]], executor: Any,
+                 max_workers: int | None, cores: int, progress: bool) -> None:
+        pool = None
+        if executor is None:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            threads = max(self._cases[k].settings.threads for k in todo)
+            workers = max_workers or max(1, cores // threads)
+            pool = ProcessPoolExecutor(max_workers=min(workers, len(todo)),
+                                       mp_context=multiprocessing.get_context("spawn"),
+                                       initializer=_ignore_sigint)
+            executor = pool
+        futures: dict[Any, int] = {}
+        done_before = sum(1 for d in self._hashes if entries[d]["status"] == "done")
+        try:
+            with _bar(progress, len(self._cases), done_before) as bar:
+                for k in todo:
+                    futures[executor.submit(run_case, self._cases[k].to_dict())] = k
+                for future in _completed(executor, list(futures)):
+                    k = futures[future]
+                    try:
+                        outcome = future.result()
+                    except Exception as exc:  # the worker itself died or was lost
+                        outcome = {"status": "failed", "hash": self._hashes[k],
+                                   "error": f"{type(exc).__name__}: {exc}",
+                                   "traceback": _traceback_summary(exc), "wall_time_s": None}
+                    entries[self._hashes[k]] = self._store_outcome(k, outcome)
+                    _write_manifest(self._store, entries)
+                    bar.update(1)
+                    if outcome["status"] == "failed":
+                        bar.set_postfix(failed=sum(
+                            1 for d in self._hashes if entries[d]["status"] == "failed"))
+        except BaseException:
+            for future in futures:
+                future.cancel()
+            if pool is not None:
+                _terminate_workers(pool)
+            raise
+        finally:
+            if pool is not None:
+                pool.shutdown(wait=True, cancel_futures=True)
+            _write_manifest(self._store, entries)
+
+    def _store_outcome(self, k: int, outcome: Mapping[str, Any]) -> dict[str, Any]:
+        """Writes a worker's outcome for case ``k``; returns its manifest entry."""
+        case = self._cases[k]
+        digest = self._hashes[k]
+        info: dict[str, Any] = {
+            "format": CASE_FORMAT, "hash": digest, "case": case.to_dict(),
+            "wall_time_s": outcome.get("wall_time_s"), "host": outcome.get("host"),
+            "pid": outcome.get("pid"), "millscope_version": _core.build_info()["version"]}
+        failure = _failure_path(self._store, digest)
+        if outcome["status"] == "done" and outcome.get("hash") != digest:
+            outcome = {"status": "failed", "error": f"the worker ran case "
+                       f"{outcome.get('hash')!r}, not {digest!r}", "traceback": None}
+        if outcome["status"] == "done":
+            meta = dict(outcome["meta"])
+            info["warm_up_samples_dropped"] = case.settings.warm_up_samples
+            meta["campaign"] = info
+            path = _case_path(self._store, digest)
+            TorqueRecord(outcome["time_s"], outcome["torque_Nm"], meta).save(path)
+            with contextlib.suppress(FileNotFoundError):
+                failure.unlink()
+            return _entry(info, "done", path, self._store)
+        info["error"] = outcome.get("error")
+        info["traceback"] = outcome.get("traceback")
+        with atomic_write(failure, "w") as fh:
+            json.dump(info, fh, indent=1)
+        return _entry(info, "failed", failure, self._store)
+
+    # -- results -------------------------------------------------------------------------------
+    def results(self) -> list[CaseResult]:
+        """Every case as the store holds it now (nothing runs), analysed over the block.
+
+        Returns
+        -------
+        list of CaseResult
+            In the order of :attr:`cases`; "pending" for cases never run.
+        """
+        out = []
+        for case, digest in zip(self._cases, self._hashes, strict=True):
+            path = _case_path(self._store, digest)
+            info = _read_done(path) if path.is_file() else None
+            if info is not None:
+                try:
+                    record = TorqueRecord.load(path)
+                except RecordError:
+                    record = None
+                if record is not None:
+                    out.append(CaseResult(case, digest, "done", record,
+                                          wall_time_s=_number(info.get("wall_time_s")),
+                                          **self._analyse(record)))
+                    continue
+            failure = _failure_path(self._store, digest)
+            info = _read_failed(failure) if failure.is_file() else None
+            if info is not None:
+                out.append(CaseResult(case, digest, "failed",
+                                      wall_time_s=_number(info.get("wall_time_s")),
+                                      error=info.get("error"), traceback=info.get("traceback")))
+            else:
+                out.append(CaseResult(case, digest, "pending"))
+        return out
+
+    def _analyse(self, record: TorqueRecord) -> dict[str, float]:
+        if self._block is None:
+            return {}
+        blk = record.block(*self._block)
+        meta = record.meta
+        lifters, rotation_hz = int(meta.get("lifters", 0)), float(meta["rotation_hz"])
+        if lifters > 0 and rotation_hz > 0:
+            a = analyze_block(blk, lifters=lifters, rotation_hz=rotation_hz,
+                              bandwidth=self._bandwidth, window=self._window)  # type: ignore[arg-type]
+            return {"mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
+                    "lth_amplitude": a.lth.amplitude, "energy": a.energy.energy,
+                    "energy_relative_std": a.energy.relative_std}
+        e = spectral_energy(blk, ["mean"], bandwidth=self._bandwidth,
+                            window=self._window)  # type: ignore[arg-type]
+        return {"mean_torque": blk.mean_torque_Nm, "energy": e.energy,
+                "energy_relative_std": e.relative_std}
+
+
+def _number(value: object) -> float:
+    return float(value) if isinstance(value, (int, float)) else math.nan
+
+
+@contextlib.contextmanager
+def _bar(enabled: bool, total: int, initial: int) -> Iterator[Any]:
+    from tqdm.auto import tqdm
+
+    with tqdm(total=total, initial=initial, desc="campaign", unit="case",
+              disable=not enabled) as bar:
+        yield bar
+
