@@ -178,7 +178,8 @@ double Engine::bytes_per_particle() const {
                         &ty_, &tz_, &r_, &m_, &inv_m_, &inv_i_, &x_ref_, &y_ref_, &z_ref_,
                         &wall_history_, &dissipative_})
     total += bytes(*v);
-  total += bytes(mat_) + bytes(wall_lifter_) + bytes(wall_held_) + bytes(order_);
+  total += bytes(mat_) + bytes(wall_lifter_) + bytes(wall_held_) + bytes(order_) +
+           bytes(lifter_reach_);
   for (const auto& b : buffers_) total += bytes(b);
   total += bytes(list_.start()) + bytes(list_.partner()) + bytes(list_.history());
   return total / static_cast<double>(n_);
@@ -500,6 +501,8 @@ void Engine::restore(const Snapshot& s) {
   torque_ = s.torque;
   ledger_ = s.ledger;
   Access::split_rows(*this);
+  // Any superset of the lifters in reach gives the same forces; a fresh one is valid.
+  if (list_.builds() > 0) Access::refresh_lifter_reach(*this);
 }
 
 void Engine::Access::rebuild(Engine& e) {
@@ -526,10 +529,32 @@ void Engine::Access::rebuild(Engine& e) {
     permute(e.order_, from, 1, scratch_u32);
     e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_, from.data());
   }
+  refresh_lifter_reach(e);
   e.x_ref_ = e.x_;
   e.y_ref_ = e.y_;
   e.z_ref_ = e.z_;
   split_rows(e);
+}
+
+void Engine::Access::refresh_lifter_reach(Engine& e) {
+  // Which lifters each particle may touch until the next refresh, so that the step kernel
+  // measures the distance to those alone. Refreshed at every list build and whenever the drum
+  // has turned the shell by skin/2 since the last refresh. Until the next one, a particle moves
+  // at most skin from where it is now (it stays within skin/2 of its place at the last build,
+  // and so was it now) and a lifter's surface at most skin/2 (it lies within the shell): a
+  // lifter not within 1.5 skin now cannot be touched before the next refresh.
+  const drum::Geometry& g = e.config_.geometry;
+  e.lifter_angles_.update(g, e.theta_);
+  e.reach_theta_ = e.theta_;
+  if (g.lifters <= 0) {
+    e.lifter_reach_.clear();
+    return;
+  }
+  const double margin = 1.5 * e.list_.skin();
+  e.lifter_reach_.resize(e.n_);
+  for (std::size_t i = 0; i < e.n_; ++i)
+    e.lifter_reach_[i] = drum::lifter_reach(g, e.lifter_angles_,
+                                            contact::Vec3(e.x_[i], e.y_[i], e.z_[i]), e.r_[i], margin);
 }
 
 void Engine::Access::split_rows(Engine& e) {

@@ -215,6 +215,36 @@ def test_charge_at_rest_torque_balances_gravity() -> None:
     assert np.all((pos[:, 2] > 0) & (pos[:, 2] < L))
 
 
+def test_a_lifter_sweeping_onto_a_ball_at_rest_pushes_it() -> None:
+    """The kernel measures lifter distances only for particles it knows to be near a lifter,
+    and looks again whenever the drum has turned far enough. A frictionless ball lies at rest
+    on the shell (so it never moves on its own and never triggers a list build) while the drum
+    turns under it: the first lifter to come round must push it, by contact, not pass through
+    it. Without gravity, so the ball stays put until then, 20 degrees ahead of lifter 5 (at
+    -135 degrees). Checked: no lifter touches it at first, then lifter torque appears, the ball
+    never sinks into the lifter by more than the Hertz overlap of a head-on impact at the
+    lifter's speed (ten times over), and it is carried round."""
+    r, R = 0.0125, 0.44
+    soft = (7860.0, 81e8, 0.3)
+    at = np.radians(-115.0)
+    eng = make_engine([r], material=soft, friction=0.0, lifters=8, drum_radius=R, gravity=0.0,
+                      positions=[[(R - r) * np.cos(at), (R - r) * np.sin(at), 0.15]])
+    omega = 2.0  # rad/s: lifter 5 reaches the ball after about 0.15 s
+    eng.start_rotation(omega)
+    # interval means, so that the short impact shows in the samples
+    before = eng.advance_sampled(1e-3, True, 100)
+    assert np.all(before[:, 3] == 0.0)
+    assert eng.list_builds == 1  # nothing has moved the ball: no list build looks again
+    lifters = eng.advance_sampled(1e-3, True, 500)[:, 3]
+    assert np.any(lifters != 0.0), "no lifter ever touched the ball"
+    e_star = soft[1] * 2 * (1 + soft[2]) / (2 * (1 - soft[2] ** 2))  # steel on steel
+    mass = np.asarray(eng.mass)[0]
+    impact = (15 * mass * (omega * R) ** 2 / (16 * e_star * np.sqrt(r))) ** 0.4
+    assert eng.max_overlap_ratio() < 10 * impact / r
+    x = eng.positions[0]
+    assert np.arctan2(x[1], x[0]) > at + np.radians(45.0)  # carried round with the drum
+
+
 # -- threads and determinism -----------------------------------------------------------------
 
 def run_drum(threads: int, steps: int = 3000):  # type: ignore[no-untyped-def]

@@ -20,6 +20,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -249,31 +250,75 @@ inline LifterProximity closest_on_lifter(const Geometry& g, double phi, const Ve
   return closest_on_lifter(g, lifter_frame(phi, x), x);
 }
 
-/// All contacts of a sphere (centre x, radius r) with the drum turned by theta, for a drum whose
-/// shape is known when compiling: without lifters (Lifters false) or with periodic ends
-/// (EndWalls false) those parts cost nothing (DESIGN.md section 7). The step kernels call this;
-/// Lifters and EndWalls must match g.lifters > 0 and g.end_walls.
+/// Lifter k against a sphere (centre x, radius r): overlap > 0 when they touch (with the normal
+/// from the lifter into the sphere and the contact point); otherwise -overlap is the gap, m.
+inline WallContact lifter_contact(const Geometry& g, const LifterAngles& at, int k, const Vec3& x,
+                                  double r) {
+  const auto slot = static_cast<std::size_t>(k);
+  const LifterFrame f = lifter_frame(at.cos_phi[slot], at.sin_phi[slot], x);
+  const LifterProximity p = closest_on_lifter(g, f, x);
+  const Vec3 d = x - p.point;
+  const double dist = d.norm();
+  if (p.inside) return {Part::lifter, k, r + dist, p.outward, p.point};
+  const double overlap = r - dist;
+  return {Part::lifter, k, overlap, overlap > 0.0 ? Vec3(d / dist) : Vec3::Zero(), p.point};
+}
+
+/// The lifters a sphere may touch before its reach is next refreshed, packed in one integer:
+/// no_lifter (-1), or 4 k + mask where k is the lower of the two lifters angularly nearest the
+/// sphere and mask bit 0 / bit 1 stand for lifter k / lifter k + 1 (mod n). The step kernels
+/// keep one per particle so that only spheres next to a lifter pay for the distance to it
+/// (DESIGN.md section 7).
+using LifterReach = std::int32_t;
+inline constexpr LifterReach no_lifter = -1;
+
+/// The lifters (at `at`) that come within `margin` (m) of the sphere's surface.
+inline LifterReach lifter_reach(const Geometry& g, const LifterAngles& at, const Vec3& x, double r,
+                                double margin) {
+  if (g.lifters <= 0) return no_lifter;
+  const double rho = std::hypot(x.x(), x.y());
+  if (!(rho + r + margin > g.radius - g.lifter_height)) return no_lifter;
+  const double spacing = 2.0 * 3.14159265358979323846 / g.lifters;
+  const double rel = (std::atan2(x.y(), x.x()) - at.theta - g.lifter_phase) / spacing;
+  int first = static_cast<int>(std::floor(rel)) % g.lifters;
+  if (first < 0) first += g.lifters;
+  int mask = 0;
+  for (int b = 0; b < 2; ++b) {
+    const int k = (first + b) % g.lifters;
+    if (lifter_contact(g, at, k, x, r).overlap > -margin) mask |= 1 << b;
+  }
+  return mask == 0 ? no_lifter : 4 * first + mask;
+}
+
+/// All contacts of a sphere (centre x, radius r) with the drum whose lifters are at `at`, for a
+/// drum whose shape is known when compiling: without lifters (Lifters false) or with periodic
+/// ends (EndWalls false) those parts cost nothing (DESIGN.md section 7). Only the lifters in
+/// `reach` are looked at. The step kernels call this; Lifters and EndWalls must match
+/// g.lifters > 0 and g.end_walls.
 template <bool Lifters, bool EndWalls>
 inline WallContacts find_contacts_of(const Geometry& g, const LifterAngles& at, const Vec3& x,
-                                     double r) {
+                                     double r, LifterReach reach) {
   WallContacts out;
   const double rho2 = x.x() * x.x() + x.y() * x.y();
-  // Far from the shell and the lifters (and, below, from the end walls): nothing to find. The
-  // radial test uses squares, so a particle in the bulk costs no square root.
-  const double reach = g.radius - (Lifters ? g.lifter_height : 0.0) - r;
-  const bool near_shell = !(reach > 0.0 && rho2 < reach * reach);
+  // Away from the shell, from every lifter and (below) from the end walls: nothing to find.
+  // The radial test uses squares, so a particle in the bulk costs no square root.
+  const double inner = g.radius - r;
+  const bool near_shell = !(inner > 0.0 && rho2 <= inner * inner);
+  const bool near_lifter = Lifters && reach != no_lifter;
   if constexpr (EndWalls) {
-    if (!near_shell && x.z() > r && x.z() + r < g.length) return out;
+    if (!near_shell && !near_lifter && x.z() > r && x.z() + r < g.length) return out;
   } else {
-    if (!near_shell) return out;
+    if (!near_shell && !near_lifter) return out;
   }
-  const double rho = std::sqrt(rho2);
   // Shell: the inside of the cylinder rho = R.
-  const double shell_overlap = rho + r - g.radius;
-  if (shell_overlap > 0.0 && rho > 0.0) {
-    const Vec3 radial(x.x() / rho, x.y() / rho, 0.0);
-    out.add({Part::shell, 0, shell_overlap, -radial,
-             Vec3(g.radius * radial.x(), g.radius * radial.y(), x.z())});
+  if (near_shell) {
+    const double rho = std::sqrt(rho2);
+    const double shell_overlap = rho + r - g.radius;
+    if (shell_overlap > 0.0 && rho > 0.0) {
+      const Vec3 radial(x.x() / rho, x.y() / rho, 0.0);
+      out.add({Part::shell, 0, shell_overlap, -radial,
+               Vec3(g.radius * radial.x(), g.radius * radial.y(), x.z())});
+    }
   }
   if constexpr (EndWalls) {
     if (r - x.z() > 0.0)
@@ -282,25 +327,14 @@ inline WallContacts find_contacts_of(const Geometry& g, const LifterAngles& at, 
       out.add(
           {Part::end_high, 0, x.z() + r - g.length, Vec3(0, 0, -1), Vec3(x.x(), x.y(), g.length)});
   }
-  // Lifters: only a sphere reaching below the lifter tops can touch one, and then only the two
-  // lifters whose centre lines are angularly nearest.
   if constexpr (Lifters) {
-    if (!(rho + r > g.radius - g.lifter_height)) return out;
-    const double spacing = 2.0 * 3.14159265358979323846 / g.lifters;
-    const double rel = (std::atan2(x.y(), x.x()) - at.theta - g.lifter_phase) / spacing;
-    const double nearest = std::floor(rel);
-    for (double kk : {nearest, nearest + 1.0}) {
-      int k = static_cast<int>(kk) % g.lifters;
-      if (k < 0) k += g.lifters;
-      const auto slot = static_cast<std::size_t>(k);
-      const LifterFrame f = lifter_frame(at.cos_phi[slot], at.sin_phi[slot], x);
-      const LifterProximity p = closest_on_lifter(g, f, x);
-      const Vec3 d = x - p.point;
-      const double dist = d.norm();
-      if (p.inside) {
-        out.add({Part::lifter, k, r + dist, p.outward, p.point});
-      } else if (dist < r) {
-        out.add({Part::lifter, k, r - dist, d / dist, p.point});
+    if (near_lifter) {
+      const int first = reach >> 2;
+      for (int b = 0; b < 2; ++b) {
+        if (!(reach & (1 << b))) continue;
+        const int k = first + b == g.lifters ? 0 : first + b;
+        const WallContact c = lifter_contact(g, at, k, x, r);
+        if (c.overlap > 0.0) out.add(c);
       }
     }
   }
@@ -312,11 +346,12 @@ inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x
   LifterAngles at;
   at.update(g, theta);
   if (g.lifters > 0) {
-    return g.end_walls ? find_contacts_of<true, true>(g, at, x, r)
-                       : find_contacts_of<true, false>(g, at, x, r);
+    const LifterReach reach = lifter_reach(g, at, x, r, 0.0);
+    return g.end_walls ? find_contacts_of<true, true>(g, at, x, r, reach)
+                       : find_contacts_of<true, false>(g, at, x, r, reach);
   }
-  return g.end_walls ? find_contacts_of<false, true>(g, at, x, r)
-                     : find_contacts_of<false, false>(g, at, x, r);
+  return g.end_walls ? find_contacts_of<false, true>(g, at, x, r, no_lifter)
+                     : find_contacts_of<false, false>(g, at, x, r, no_lifter);
 }
 
 }  // namespace millscope::drum

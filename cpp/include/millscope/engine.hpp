@@ -229,6 +229,8 @@ class Engine {
   std::vector<std::uint32_t> order_;          // n: the caller's index of the particle in slot k
   std::vector<std::uint8_t> wall_held_;       // n: bit s set while wall slot s holds a contact
   drum::LifterAngles lifter_angles_;          // the lifters at theta_ (kept in step by the kernel)
+  std::vector<drum::LifterReach> lifter_reach_;  // n: the lifters each particle may touch
+  double reach_theta_ = 0.0;                  // drum angle when lifter_reach_ was refreshed
   std::size_t buffer_width_ = 6;               // sums per particle, see buffer_width()
   std::vector<double> dissipative_;           // 6 x n: pair sums of the dissipating forces and
                                               // torques (only when the law dissipates)

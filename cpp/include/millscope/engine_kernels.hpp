@@ -35,6 +35,7 @@ struct Engine::Access {
   static void run(Engine& e, long steps, StepObserver* observer);
 
   static void rebuild(Engine& e);
+  static void refresh_lifter_reach(Engine& e);
   static void split_rows(Engine& e);
   static std::string describe_bad(const Engine& e, std::size_t i);
 };
@@ -62,6 +63,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   const materials::PairConstants pc_one = e.pairs_(0, 0);
   const materials::PairTable& table = e.pairs_;
   const double skin_half2 = 0.25 * e.list_.skin() * e.list_.skin();
+  const double lifter_drift = 0.5 * e.list_.skin();  // see refresh_lifter_reach
 
   double* const x = e.x_.data();
   double* const y = e.y_.data();
@@ -218,7 +220,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         }
       }
       const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
-      const drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(geom, e.lifter_angles_, xi, r[i]);
+      const drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(
+          geom, e.lifter_angles_, xi, r[i], Lifters ? e.lifter_reach_[i] : drum::no_lifter);
       [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
       [[maybe_unused]] std::int32_t* const lifter_of_slot = &e.wall_lifter_[2 * i];
       [[maybe_unused]] double* const wall_hist =
@@ -413,7 +416,12 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         ++e.step_;
         double move2 = 0.0;
         for (const auto& p : partial) move2 = std::max(move2, p.displacement2);
-        if (move2 > skin_half2) rebuild(e);
+        if (move2 > skin_half2) {
+          rebuild(e);
+        } else if constexpr (Lifters) {
+          // The lifters have moved as far as the particles may: look again which are near.
+          if (geom.radius * std::abs(e.theta_ - e.reach_theta_) > lifter_drift) refresh_lifter_reach(e);
+        }
       }
       pair_pass(t, dt);
 #pragma omp barrier
