@@ -35,6 +35,7 @@ std::set<int> used_materials(const Config& c) {
 void validate(const Config& c) {
   const auto n_mat = static_cast<int>(c.materials.size());
   if (n_mat == 0) throw std::invalid_argument("materials is empty; at least one is needed");
+  if (n_mat > 256) invalid("the number of materials", n_mat, "<= 256");
   if (c.drum_material < 0 || c.drum_material >= n_mat)
     invalid("drum_material", c.drum_material, "an index in [0, " + std::to_string(n_mat) + ")");
   c.geometry.validate();
@@ -137,13 +138,13 @@ Engine::Engine(Config config)
                                 config_.geometry.end_walls ? 0.0 : config_.geometry.length);
 
   for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_, &ty_,
-                  &tz_, &x_ref_, &y_ref_, &z_ref_})
+                  &tz_})
     v->assign(n_, 0.0);
+  for (auto* v : {&x_ref_, &y_ref_, &z_ref_}) v->assign(n_, 0.0f);
   order_.resize(n_);
   std::iota(order_.begin(), order_.end(), 0u);
   set_particle_constants();
-  wall_history_.assign(friction ? n_ * wall_slots * 3 : 0, 0.0);
-  wall_lifter_.assign(2 * n_, -1);
+  wall_block_.assign(friction ? n_ : 0, -1);  // blocks are handed out by refresh_walls
   wall_held_.assign(friction ? n_ : 0, 0);
   // Forces and torques (6), and when the law dissipates, the dissipating force and torque (6
   // more) per particle (engine.hpp, buffer_width). The buffers are sized by split_rows.
@@ -163,7 +164,7 @@ void Engine::set_particle_constants() {
   inv_i_.resize(n_);
   for (std::size_t k = 0; k < n_; ++k) {
     r_[k] = config_.radius[order_[k]];
-    mat_[k] = config_.material[order_[k]];
+    mat_[k] = static_cast<std::uint8_t>(config_.material[order_[k]]);
     const auto& mat = config_.materials[static_cast<std::size_t>(mat_[k])];
     m_[k] = materials::sphere_mass(mat.density, r_[k]);
     inv_m_[k] = 1.0 / m_[k];
@@ -175,11 +176,11 @@ double Engine::bytes_per_particle() const {
   auto bytes = [](const auto& v) { return static_cast<double>(v.capacity() * sizeof(v[0])); };
   double total = 0.0;
   for (const auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_,
-                        &ty_, &tz_, &r_, &m_, &inv_m_, &inv_i_, &x_ref_, &y_ref_, &z_ref_,
-                        &wall_history_, &dissipative_})
+                        &ty_, &tz_, &r_, &m_, &inv_m_, &inv_i_, &wall_history_, &dissipative_})
     total += bytes(*v);
-  total += bytes(mat_) + bytes(wall_lifter_) + bytes(wall_held_) + bytes(order_) +
-           bytes(lifter_reach_);
+  total += bytes(x_ref_) + bytes(y_ref_) + bytes(z_ref_);
+  total += bytes(mat_) + bytes(wall_block_) + bytes(wall_lifter_) + bytes(wall_held_) +
+           bytes(order_) + bytes(lifter_reach_);
   for (const auto& b : buffers_) total += bytes(b);
   total += bytes(list_.start()) + bytes(list_.partner()) + bytes(list_.history());
   return total / static_cast<double>(n_);
@@ -194,8 +195,9 @@ void Engine::start_rotation(double omega) {
 
 namespace {
 /// Reads n x 3 values into three arrays; slot k takes row order[k] (or row k without order).
-void copy_in(const double* xyz, std::size_t n, std::vector<double>& a, std::vector<double>& b,
-             std::vector<double>& c, const char* what, const std::uint32_t* order = nullptr) {
+template <class T>
+void copy_in(const double* xyz, std::size_t n, std::vector<T>& a, std::vector<T>& b,
+             std::vector<T>& c, const char* what, const std::uint32_t* order = nullptr) {
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = order != nullptr ? order[k] : k;
     if (!std::isfinite(xyz[3 * i]) || !std::isfinite(xyz[3 * i + 1]) ||
@@ -203,14 +205,15 @@ void copy_in(const double* xyz, std::size_t n, std::vector<double>& a, std::vect
       throw std::invalid_argument(std::string(what) + "[" + std::to_string(i) +
                                   "] is not finite; every value must be");
     }
-    a[k] = xyz[3 * i];
-    b[k] = xyz[3 * i + 1];
-    c[k] = xyz[3 * i + 2];
+    a[k] = static_cast<T>(xyz[3 * i]);
+    b[k] = static_cast<T>(xyz[3 * i + 1]);
+    c[k] = static_cast<T>(xyz[3 * i + 2]);
   }
 }
 /// Writes three arrays as n x 3 values; slot k goes to row order[k] (or row k without order).
-std::vector<double> copy_out(const std::vector<double>& a, const std::vector<double>& b,
-                             const std::vector<double>& c, const std::uint32_t* order = nullptr) {
+template <class T>
+std::vector<double> copy_out(const std::vector<T>& a, const std::vector<T>& b,
+                             const std::vector<T>& c, const std::uint32_t* order = nullptr) {
   std::vector<double> out(3 * a.size());
   for (std::size_t k = 0; k < a.size(); ++k) {
     const std::size_t i = order != nullptr ? order[k] : k;
@@ -246,8 +249,9 @@ void Engine::set_positions(const double* xyz) {
   // A new configuration: no contact history survives, the list is built afresh.
   list_ = neighbors::VerletList(list_.skin(), list_.history_size(),
                                 config_.geometry.end_walls ? 0.0 : config_.geometry.length);
-  std::fill(wall_history_.begin(), wall_history_.end(), 0.0);
-  std::fill(wall_lifter_.begin(), wall_lifter_.end(), -1);
+  wall_history_.clear();
+  wall_lifter_.clear();
+  std::fill(wall_block_.begin(), wall_block_.end(), -1);
   std::fill(wall_held_.begin(), wall_held_.end(), std::uint8_t{0});
   forces_valid_ = false;
 }
@@ -368,9 +372,10 @@ namespace {
 /// Visits every touching contact: f(pair constants, overlap, R*, smaller radius, history or null).
 template <class F>
 void for_each_contact(const Engine& e, const materials::PairTable& table, const Config& c,
-                      const std::vector<double>& r, const std::vector<int>& mat,
+                      const std::vector<double>& r, const std::vector<std::uint8_t>& mat,
                       const std::vector<double>& x, const std::vector<double>& y,
                       const std::vector<double>& z, const neighbors::VerletList& list,
+                      const std::vector<std::int32_t>& wall_block,
                       const std::vector<double>& wall_history,
                       const std::vector<std::int32_t>& wall_lifter, F&& f) {
   const std::size_t hs = list.history_size();
@@ -392,10 +397,11 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
     for (int k = 0; k < found.count; ++k) {
       const auto& wc = found.items[static_cast<std::size_t>(k)];
       const double* hist = nullptr;
-      if (!wall_history.empty()) {
+      if (!wall_block.empty() && wall_block[i] >= 0) {
+        const auto block = static_cast<std::size_t>(wall_block[i]);
         std::size_t slot = static_cast<std::size_t>(wc.part);
-        if (wc.part == drum::Part::lifter) slot = wall_lifter[2 * i] == wc.index ? 3 : 4;
-        hist = wall_history.data() + (i * wall_slots + slot) * 3;
+        if (wc.part == drum::Part::lifter) slot = wall_lifter[2 * block] == wc.index ? 3 : 4;
+        hist = wall_history.data() + (block * wall_slots + slot) * 3;
       }
       const auto& p = table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(c.drum_material));
       f(p, wc.overlap, r[i], r[i], hist);
@@ -407,7 +413,8 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
 double Engine::elastic_energy() const {
   double u = 0.0;
   const bool friction = has_friction(variant_);
-  for_each_contact(*this, pairs_, config_, r_, mat_, x_, y_, z_, list_, wall_history_, wall_lifter_,
+  for_each_contact(*this, pairs_, config_, r_, mat_, x_, y_, z_, list_, wall_block_, wall_history_,
+                   wall_lifter_,
                    [&](const materials::PairConstants& p, double d_n, double r_star, double,
                        const double* hist) {
                      const double sqrt_rd = std::sqrt(r_star * d_n);
@@ -419,7 +426,8 @@ double Engine::elastic_energy() const {
 
 double Engine::max_overlap_ratio() const {
   double worst = 0.0;
-  for_each_contact(*this, pairs_, config_, r_, mat_, x_, y_, z_, list_, wall_history_, wall_lifter_,
+  for_each_contact(*this, pairs_, config_, r_, mat_, x_, y_, z_, list_, wall_block_, wall_history_,
+                   wall_lifter_,
                    [&](const materials::PairConstants&, double d_n, double, double r_small,
                        const double*) { worst = std::max(worst, d_n / r_small); });
   return worst;
@@ -434,8 +442,17 @@ Engine::Snapshot Engine::snapshot() const {
   s.f = copy_out(fx_, fy_, fz_);
   s.t = copy_out(tx_, ty_, tz_);
   s.x_ref = copy_out(x_ref_, y_ref_, z_ref_);
-  s.wall_history = wall_history_;
-  s.wall_lifter = wall_lifter_;
+  // Wall history per particle (slot order), as if every particle had a block.
+  s.wall_history.assign(wall_block_.empty() ? 0 : n_ * wall_slots * 3, 0.0);
+  s.wall_lifter.assign(2 * n_, -1);
+  for (std::size_t i = 0; i < wall_block_.size(); ++i) {
+    if (wall_block_[i] < 0) continue;
+    const auto b = static_cast<std::size_t>(wall_block_[i]);
+    std::copy_n(wall_history_.begin() + static_cast<std::ptrdiff_t>(b * wall_slots * 3),
+                wall_slots * 3, s.wall_history.begin() + static_cast<std::ptrdiff_t>(i * wall_slots * 3));
+    std::copy_n(wall_lifter_.begin() + static_cast<std::ptrdiff_t>(2 * b), 2,
+                s.wall_lifter.begin() + static_cast<std::ptrdiff_t>(2 * i));
+  }
   s.list_start = list_.start();
   s.list_partner = list_.partner();
   s.list_history = list_.history();
@@ -458,8 +475,9 @@ void Engine::restore(const Snapshot& s) {
   };
   for (const auto* a : {&s.x, &s.v, &s.w, &s.f, &s.t, &s.x_ref})
     require(a->size() == n3, "a state array has " + std::to_string(a->size()) + " values, not " + std::to_string(n3));
-  require(s.wall_history.size() == wall_history_.size(), "wall history size");
-  require(s.wall_lifter.size() == wall_lifter_.size(), "wall lifter slots size");
+  require(s.wall_history.size() == (wall_block_.empty() ? 0 : n_ * wall_slots * 3),
+          "wall history size");
+  require(s.wall_lifter.size() == 2 * n_, "wall lifter slots size");
   require(s.step >= 0, "step < 0");
   require(s.order.size() == n_, "order has " + std::to_string(s.order.size()) + " entries, not " +
                                     std::to_string(n_));
@@ -479,8 +497,12 @@ void Engine::restore(const Snapshot& s) {
   copy_in(s.f.data(), n_, fx_, fy_, fz_, "forces");
   copy_in(s.t.data(), n_, tx_, ty_, tz_, "torques");
   copy_in(s.x_ref.data(), n_, x_ref_, y_ref_, z_ref_, "reference positions");
-  wall_history_ = s.wall_history;
-  wall_lifter_ = s.wall_lifter;
+  // Every particle gets its own block for now; refresh_walls (below) keeps those near the drum.
+  if (!wall_block_.empty()) {
+    wall_history_ = s.wall_history;
+    wall_lifter_ = s.wall_lifter;
+    std::iota(wall_block_.begin(), wall_block_.end(), 0);
+  }
   // Which slots are held follows from the history (a held slot whose history is exactly zero
   // behaves the same when cleared).
   for (std::size_t i = 0; i < wall_held_.size(); ++i) {
@@ -501,8 +523,9 @@ void Engine::restore(const Snapshot& s) {
   torque_ = s.torque;
   ledger_ = s.ledger;
   Access::split_rows(*this);
-  // Any superset of the lifters in reach gives the same forces; a fresh one is valid.
-  if (list_.builds() > 0) Access::refresh_lifter_reach(*this);
+  // Which lifters are in reach and who keeps wall history change no force: a fresh look is
+  // valid (refresh_walls), and with the list not yet built, the first step builds it.
+  if (list_.builds() > 0) Access::refresh_walls(*this);
 }
 
 void Engine::Access::rebuild(Engine& e) {
@@ -518,43 +541,71 @@ void Engine::Access::rebuild(Engine& e) {
     for (auto* a : {&e.x_, &e.y_, &e.z_, &e.vx_, &e.vy_, &e.vz_, &e.wx_, &e.wy_, &e.wz_, &e.fx_,
                     &e.fy_, &e.fz_, &e.tx_, &e.ty_, &e.tz_, &e.r_, &e.m_, &e.inv_m_, &e.inv_i_})
       permute(*a, from, 1, scratch);
-    permute(e.wall_history_, from, wall_slots * 3, scratch);
-    std::vector<int> scratch_int;
-    permute(e.mat_, from, 1, scratch_int);
-    std::vector<std::int32_t> scratch_i32;
-    permute(e.wall_lifter_, from, 2, scratch_i32);
     std::vector<std::uint8_t> scratch_u8;
+    permute(e.mat_, from, 1, scratch_u8);
+    std::vector<std::int32_t> scratch_i32;
+    permute(e.wall_block_, from, 1, scratch_i32);  // the blocks stay; refresh_walls re-packs
     permute(e.wall_held_, from, 1, scratch_u8);
     std::vector<std::uint32_t> scratch_u32;
     permute(e.order_, from, 1, scratch_u32);
     e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_, from.data());
   }
-  refresh_lifter_reach(e);
-  e.x_ref_ = e.x_;
-  e.y_ref_ = e.y_;
-  e.z_ref_ = e.z_;
+  refresh_walls(e);
+  for (std::size_t i = 0; i < e.n_; ++i) {
+    e.x_ref_[i] = static_cast<float>(e.x_[i]);
+    e.y_ref_[i] = static_cast<float>(e.y_[i]);
+    e.z_ref_[i] = static_cast<float>(e.z_[i]);
+  }
   split_rows(e);
 }
 
-void Engine::Access::refresh_lifter_reach(Engine& e) {
-  // Which lifters each particle may touch until the next refresh, so that the step kernel
-  // measures the distance to those alone. Refreshed at every list build and whenever the drum
-  // has turned the shell by skin/2 since the last refresh. Until the next one, a particle moves
-  // at most skin from where it is now (it stays within skin/2 of its place at the last build,
-  // and so was it now) and a lifter's surface at most skin/2 (it lies within the shell): a
-  // lifter not within 1.5 skin now cannot be touched before the next refresh.
+void Engine::Access::refresh_walls(Engine& e) {
+  // Which particles may touch the drum, and which lifters, until the next refresh: only those
+  // measure the distance to a lifter in the step kernel, and only those keep wall contact
+  // history. Refreshed at every list build and whenever the drum has turned the shell by
+  // skin/2 since the last refresh. Until the next one, a particle moves at most skin from where
+  // it is now (it stays within skin/2 of its place at the last build, and so was it now) and a
+  // lifter's surface at most skin/2 (it lies within the shell): a part of the drum not within
+  // 1.5 skin now cannot be touched before the next refresh.
   const drum::Geometry& g = e.config_.geometry;
   e.lifter_angles_.update(g, e.theta_);
   e.reach_theta_ = e.theta_;
-  if (g.lifters <= 0) {
-    e.lifter_reach_.clear();
-    return;
-  }
   const double margin = 1.5 * e.list_.skin();
-  e.lifter_reach_.resize(e.n_);
-  for (std::size_t i = 0; i < e.n_; ++i)
-    e.lifter_reach_[i] = drum::lifter_reach(g, e.lifter_angles_,
-                                            contact::Vec3(e.x_[i], e.y_[i], e.z_[i]), e.r_[i], margin);
+  if (g.lifters > 0) {
+    e.lifter_reach_.resize(e.n_);
+    for (std::size_t i = 0; i < e.n_; ++i)
+      e.lifter_reach_[i] = drum::lifter_reach(
+          g, e.lifter_angles_, contact::Vec3(e.x_[i], e.y_[i], e.z_[i]), e.r_[i], margin);
+  } else {
+    e.lifter_reach_.clear();
+  }
+  if (e.wall_block_.empty()) return;  // no friction: no wall history
+  // Blocks of wall history for the particles near the shell, an end wall or a lifter, and for
+  // any that still holds a contact; packed in particle order, carried over from the old blocks.
+  constexpr std::size_t width = wall_slots * 3;
+  std::vector<std::int32_t> block(e.n_, -1);
+  std::int32_t blocks = 0;
+  for (std::size_t i = 0; i < e.n_; ++i) {
+    const double rho = std::hypot(e.x_[i], e.y_[i]), r = e.r_[i];
+    bool near = rho + r + margin > g.radius || e.wall_held_[i] != 0;
+    if (g.end_walls) near = near || e.z_[i] - r < margin || e.z_[i] + r + margin > g.length;
+    if (g.lifters > 0) near = near || e.lifter_reach_[i] != drum::no_lifter;
+    if (near) block[i] = blocks++;
+  }
+  std::vector<double> history(static_cast<std::size_t>(blocks) * width, 0.0);
+  std::vector<std::int32_t> lifter(2 * static_cast<std::size_t>(blocks), -1);
+  for (std::size_t i = 0; i < e.n_; ++i) {
+    const std::int32_t old = e.wall_block_[i];
+    if (block[i] < 0 || old < 0) continue;
+    const auto from = static_cast<std::size_t>(old), to = static_cast<std::size_t>(block[i]);
+    std::copy_n(e.wall_history_.begin() + static_cast<std::ptrdiff_t>(from * width), width,
+                history.begin() + static_cast<std::ptrdiff_t>(to * width));
+    std::copy_n(e.wall_lifter_.begin() + static_cast<std::ptrdiff_t>(2 * from), 2,
+                lifter.begin() + static_cast<std::ptrdiff_t>(2 * to));
+  }
+  e.wall_block_.swap(block);
+  e.wall_history_.swap(history);
+  e.wall_lifter_.swap(lifter);
 }
 
 void Engine::Access::split_rows(Engine& e) {
@@ -587,7 +638,7 @@ std::string Engine::Access::describe_bad(const Engine& e, std::size_t i) {
   msg.precision(6);
   const double rho = std::hypot(e.x_[i], e.y_[i]);
   msg << "the simulation stopped at step " << e.step_ << " (t = " << e.time() << " s): particle "
-      << e.order_[i] << " (radius " << e.r_[i] << " m, material " << e.mat_[i] << ") ";
+      << e.order_[i] << " (radius " << e.r_[i] << " m, material " << static_cast<int>(e.mat_[i]) << ") ";
   const double values[] = {e.x_[i], e.y_[i], e.z_[i], e.vx_[i], e.vy_[i], e.vz_[i],
                            e.fx_[i], e.fy_[i], e.fz_[i]};
   const bool finite = std::all_of(std::begin(values), std::end(values),

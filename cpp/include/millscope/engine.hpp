@@ -222,15 +222,21 @@ class Engine {
   std::vector<double> x_, y_, z_, vx_, vy_, vz_, wx_, wy_, wz_;
   std::vector<double> fx_, fy_, fz_, tx_, ty_, tz_;
   std::vector<double> r_, m_, inv_m_, inv_i_;
-  std::vector<int> mat_;
-  std::vector<double> x_ref_, y_ref_, z_ref_;
-  std::vector<double> wall_history_;          // n x wall_slots x 3 (friction only)
-  std::vector<std::int32_t> wall_lifter_;     // n x 2: lifter index of each lifter slot, -1 free
+  std::vector<std::uint8_t> mat_;             // material index (at most 256 materials)
+  // Positions at the last list build, in single precision: they only tell how far a particle
+  // has moved, and the step kernel allows for their rounding (ref_rounding()).
+  std::vector<float> x_ref_, y_ref_, z_ref_;
+  // Wall contact history, kept only for the particles near the drum (friction only): particle
+  // i owns block wall_block_[i] (-1: none) of wall_slots x 3 doubles in wall_history_ and of 2
+  // lifter indices (-1: free) in wall_lifter_. Re-packed by Access::refresh_walls.
+  std::vector<std::int32_t> wall_block_;      // n
+  std::vector<double> wall_history_;          // blocks x wall_slots x 3
+  std::vector<std::int32_t> wall_lifter_;     // blocks x 2: lifter index of each lifter slot
   std::vector<std::uint32_t> order_;          // n: the caller's index of the particle in slot k
   std::vector<std::uint8_t> wall_held_;       // n: bit s set while wall slot s holds a contact
   drum::LifterAngles lifter_angles_;          // the lifters at theta_ (kept in step by the kernel)
   std::vector<drum::LifterReach> lifter_reach_;  // n: the lifters each particle may touch
-  double reach_theta_ = 0.0;                  // drum angle when lifter_reach_ was refreshed
+  double reach_theta_ = 0.0;                  // drum angle at the last Access::refresh_walls
   std::size_t buffer_width_ = 6;               // sums per particle, see buffer_width()
   std::vector<double> dissipative_;           // 6 x n: pair sums of the dissipating forces and
                                               // torques (only when the law dissipates)

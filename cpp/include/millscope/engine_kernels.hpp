@@ -28,6 +28,7 @@ struct alignas(64) StepPartial {
   double dissipation_shift = 0.0;                 // J: see Ledger::dissipated
   double displacement2 = 0.0;                     // largest squared move since the list build
   std::size_t bad = std::numeric_limits<std::size_t>::max();  // first particle in a bad state
+  std::size_t homeless = std::numeric_limits<std::size_t>::max();  // touches the drum, no block
 };
 
 struct Engine::Access {
@@ -35,7 +36,7 @@ struct Engine::Access {
   static void run(Engine& e, long steps, StepObserver* observer);
 
   static void rebuild(Engine& e);
-  static void refresh_lifter_reach(Engine& e);
+  static void refresh_walls(Engine& e);
   static void split_rows(Engine& e);
   static std::string describe_bad(const Engine& e, std::size_t i);
 };
@@ -62,8 +63,14 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   const std::size_t drum_mat = static_cast<std::size_t>(e.config_.drum_material);
   const materials::PairConstants pc_one = e.pairs_(0, 0);
   const materials::PairTable& table = e.pairs_;
-  const double skin_half2 = 0.25 * e.list_.skin() * e.list_.skin();
-  const double lifter_drift = 0.5 * e.list_.skin();  // see refresh_lifter_reach
+  // A rebuild is due once a particle may have moved skin/2 since the last build. The reference
+  // positions are floats: each coordinate is off by at most half an ulp of the drum's largest
+  // extent, so the test moves the threshold in by that much (x sqrt(3), and twice over).
+  const double ref_rounding = 2.0 * std::sqrt(3.0) * 0.5 * std::numeric_limits<float>::epsilon() *
+                              std::max(geom.radius, geom.length);
+  const double skin_half = 0.5 * e.list_.skin() - ref_rounding;
+  const double skin_half2 = skin_half * skin_half;
+  const double lifter_drift = 0.5 * e.list_.skin();  // see refresh_walls
 
   double* const x = e.x_.data();
   double* const y = e.y_.data();
@@ -84,7 +91,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   const double* const m = e.m_.data();
   const double* const inv_m = e.inv_m_.data();
   const double* const inv_i = e.inv_i_.data();
-  const int* const mat = e.mat_.data();
+  const std::uint8_t* const mat = e.mat_.data();
 
   std::vector<StepPartial> partial(static_cast<std::size_t>(team));
   bool stop = steps <= 0 && e.forces_valid_;
@@ -220,12 +227,21 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         }
       }
       const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
-      const drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(
+      drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(
           geom, e.lifter_angles_, xi, r[i], Lifters ? e.lifter_reach_[i] : drum::no_lifter);
       [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
-      [[maybe_unused]] std::int32_t* const lifter_of_slot = &e.wall_lifter_[2 * i];
-      [[maybe_unused]] double* const wall_hist =
-          friction ? &e.wall_history_[i * wall_slots * 3] : nullptr;
+      [[maybe_unused]] std::int32_t* lifter_of_slot = nullptr;
+      [[maybe_unused]] double* wall_hist = nullptr;
+      if constexpr (friction) {
+        const std::int32_t block = e.wall_block_[i];
+        if (block >= 0) {
+          lifter_of_slot = &e.wall_lifter_[2 * static_cast<std::size_t>(block)];
+          wall_hist = &e.wall_history_[static_cast<std::size_t>(block) * wall_slots * 3];
+        } else if (found.count > 0) {
+          part.homeless = std::min(part.homeless, i);  // refresh_walls missed it: a bug
+          found.count = 0;
+        }
+      }
       for (int c = 0; c < found.count; ++c) {
         const drum::WallContact& wc = found.items[static_cast<std::size_t>(c)];
         double* hist = nullptr;
@@ -362,8 +378,9 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   auto close_step = [&](double ledger_dt) {
     Torque tq;
     double damping = 0.0, friction_loss = 0.0, shift = 0.0;
-    std::size_t bad = std::numeric_limits<std::size_t>::max();
+    std::size_t bad = std::numeric_limits<std::size_t>::max(), homeless = bad;
     for (const auto& p : partial) {
+      homeless = std::min(homeless, p.homeless);
       tq.shell += p.shell;
       tq.lifters += p.lifters;
       tq.ends += p.ends;
@@ -379,6 +396,12 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     if (ledger_dt > 0.0) {
       e.ledger_.friction_loss += friction_loss;
       e.ledger_.dissipated += damping * ledger_dt + friction_loss + shift;
+    }
+    if (homeless != std::numeric_limits<std::size_t>::max()) {
+      error = "internal error: particle " + std::to_string(e.order_[homeless]) +
+              " touches the drum but was given no wall history (Engine::Access::refresh_walls); "
+              "please report it with the scene";
+      return true;
     }
     if (bad != std::numeric_limits<std::size_t>::max()) {
       error = describe_bad(e, bad);
@@ -420,7 +443,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           rebuild(e);
         } else if constexpr (Lifters) {
           // The lifters have moved as far as the particles may: look again which are near.
-          if (geom.radius * std::abs(e.theta_ - e.reach_theta_) > lifter_drift) refresh_lifter_reach(e);
+          if (geom.radius * std::abs(e.theta_ - e.reach_theta_) > lifter_drift) refresh_walls(e);
         }
       }
       pair_pass(t, dt);
