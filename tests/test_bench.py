@@ -72,6 +72,17 @@ def test_particle_steps_are_the_engines_steps_times_particles(cache: Path, steps
     assert (m.particles, m.threads, m.dt) == (391, 1, sim.dt)
 
 
+def test_cached_states_are_kept_apart_by_checkpoint_format(
+        cache: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A build that writes another checkpoint format does not pick up (and fail to load) a
+    state cached by an older one: it prepares its own."""
+    path = bench.tumbling_state("balls", "tiny", float(SPIN_UP), cache_dir=cache)
+    ms.Simulation.load(path)  # this build reads what it cached
+    monkeypatch.setattr(bench, "CHECKPOINT_FORMAT", "millscope-checkpoint-999")
+    other = bench._cache_path(cache, "balls", "tiny", float(SPIN_UP), None)
+    assert other != path and not other.exists()
+
+
 def test_bytes_per_particle_is_the_engines_report(cache: Path) -> None:
     path = bench.tumbling_state("balls", "tiny", float(SPIN_UP), cache_dir=cache)
     sim = ms.Simulation.load(path, threads=1)

@@ -38,7 +38,7 @@ from . import presets
 from ._core import build_info
 from .contact import MAX_DT_FRACTION
 from .scene import Scene
-from .simulation import Simulation
+from .simulation import CHECKPOINT_FORMAT, Simulation
 
 __all__ = [
     "DEFAULT_CACHE_DIR",
@@ -188,8 +188,11 @@ class Measurement:
 
 def _cache_path(cache_dir: Path, name: str, scale: str, spin_up_s: float,
                 dt: float | None) -> Path:
+    # The checkpoint format is in the name: a build that reads another format makes its own.
     step = "" if dt is None else f"-dt{dt:.6g}"
-    return cache_dir / f"{name}-{scale}-spin{spin_up_s:g}{step}-{build_info()['version']}.npz"
+    fmt = CHECKPOINT_FORMAT.rsplit("-", 1)[-1]
+    return cache_dir / (f"{name}-{scale}-spin{spin_up_s:g}{step}-{build_info()['version']}"
+                        f"-ckpt{fmt}.npz")
 
 
 def tumbling_state(name: str, scale: str, spin_up_s: float, *,
@@ -209,7 +212,8 @@ def tumbling_state(name: str, scale: str, spin_up_s: float, *,
     cache_dir : str or Path
         Folder of the cached checkpoints; made if missing.
     use_cache : bool
-        Reuse a checkpoint made earlier for the same scene, scale, spin-up, dt and version.
+        Reuse a checkpoint made earlier for the same scene, scale, spin-up, dt, version and
+        checkpoint format.
     dt : float, optional
         Time step, s; default the engine's, 0.2 x the smallest Rayleigh time.
     threads : int, optional
