@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import millscope as ms
+from millscope.contact import hertz_max_overlap
 
 
 def quick_sim(seed: int = 0) -> ms.Simulation:
@@ -17,25 +18,19 @@ def quick_sim(seed: int = 0) -> ms.Simulation:
 def hertz_overlap_bound(scene: ms.Scene, speed_fraction: float) -> float:
     """The largest overlap / smaller radius that Hertz theory allows in ``scene``: a head-on,
     undamped impact of each pair (and each fraction on the drum) at the fastest speed a particle
-    can reach, a fall across the drum plus the shell's speed, sqrt(4 g R) + omega R.
-    Overlap of a Hertz impact at speed v: (15 m* v^2 / (16 E* sqrt(R*)))^(2/5)."""
+    can reach, a fall across the drum plus the shell's speed, sqrt(4 g R) + omega R."""
     radius = scene.drum.radius
     v = np.sqrt(4.0 * 9.81 * radius) + speed_fraction * scene.critical_speed_rad_s * radius
-
-    def e_eff(a: ms.Material) -> float:
-        return (1.0 - a.poisson**2) / a.youngs_modulus
-
+    drum = scene.material(scene.drum.material)
     worst = 0.0
-    bodies = [(f.radius, f.volume / f.count * scene.material(f.material).density,
-               scene.material(f.material)) for f in scene.charge]
-    for ri, mi, ai in bodies:
-        partners = [*bodies, (np.inf, np.inf, scene.material(scene.drum.material))]
-        for rj, mj, aj in partners:
-            r_star = ri if np.isinf(rj) else ri * rj / (ri + rj)
-            m_star = mi if np.isinf(mj) else mi * mj / (mi + mj)
-            e_star = 1.0 / (e_eff(ai) + e_eff(aj))
-            overlap = (15.0 * m_star * v**2 / (16.0 * e_star * np.sqrt(r_star))) ** 0.4
-            worst = max(worst, overlap / min(ri, rj))
+    for a in scene.charge:
+        mat_a = scene.material(a.material)
+        overlap = hertz_max_overlap(mat_a, drum, a.diameter, None, v)
+        worst = max(worst, overlap / a.radius)
+        for b in scene.charge:
+            overlap = hertz_max_overlap(mat_a, scene.material(b.material), a.diameter,
+                                        b.diameter, v)
+            worst = max(worst, overlap / min(a.radius, b.radius))
     return worst
 
 
