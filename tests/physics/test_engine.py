@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 from millscope import _core
-from millscope.contact import (hertz_contact_time, hertz_max_overlap, pair_properties,
-                               rayleigh_time)
+from millscope.contact import hertz_contact_time, hertz_max_overlap, pair_properties, rayleigh_time
 
 STEEL = (7860.0, 81e9, 0.3)  # density kg/m^3, shear modulus Pa, Poisson ratio (Table 2)
 G = 9.81
