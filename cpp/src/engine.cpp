@@ -381,6 +381,8 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
   const std::size_t hs = list.history_size();
   const double period = c.geometry.length;
   const bool listed = list.start().size() == e.size() + 1;  // not before the first build
+  drum::LifterAngles at;
+  at.update(c.geometry, e.drum_angle());
   for (std::size_t i = 0; i < e.size(); ++i) {
     for (std::uint32_t s = listed ? list.start()[i] : 0; listed && s < list.start()[i + 1]; ++s) {
       const std::size_t j = list.partner()[s];
@@ -393,7 +395,7 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
       f(p, d_n, r[i] * r[j] / (r[i] + r[j]), std::min(r[i], r[j]),
         hs > 0 ? list.history().data() + s * hs : nullptr);
     }
-    const auto found = drum::find_contacts(c.geometry, e.drum_angle(), contact::Vec3(x[i], y[i], z[i]), r[i]);
+    const auto found = drum::find_contacts(c.geometry, at, contact::Vec3(x[i], y[i], z[i]), r[i]);
     for (int k = 0; k < found.count; ++k) {
       const auto& wc = found.items[static_cast<std::size_t>(k)];
       const double* hist = nullptr;
@@ -539,15 +541,15 @@ void Engine::Access::rebuild(Engine& e) {
         e.list_.spatial_order(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_);
     std::vector<double> scratch;
     for (auto* a : {&e.x_, &e.y_, &e.z_, &e.vx_, &e.vy_, &e.vz_, &e.wx_, &e.wy_, &e.wz_, &e.fx_,
-                    &e.fy_, &e.fz_, &e.tx_, &e.ty_, &e.tz_, &e.r_, &e.m_, &e.inv_m_, &e.inv_i_})
+                    &e.fy_, &e.fz_, &e.tx_, &e.ty_, &e.tz_})
       permute(*a, from, 1, scratch);
-    std::vector<std::uint8_t> scratch_u8;
-    permute(e.mat_, from, 1, scratch_u8);
     std::vector<std::int32_t> scratch_i32;
     permute(e.wall_block_, from, 1, scratch_i32);  // the blocks stay; refresh_walls re-packs
+    std::vector<std::uint8_t> scratch_u8;
     permute(e.wall_held_, from, 1, scratch_u8);
     std::vector<std::uint32_t> scratch_u32;
     permute(e.order_, from, 1, scratch_u32);
+    e.set_particle_constants();  // radius, material, mass, inverses follow from order_
     e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_, from.data());
   }
   refresh_walls(e);

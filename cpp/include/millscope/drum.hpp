@@ -341,10 +341,10 @@ inline WallContacts find_contacts_of(const Geometry& g, const LifterAngles& at, 
   return out;
 }
 
-/// find_contacts_of for a drum whose shape is known only at run time (probes, tests).
-inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x, double r) {
-  LifterAngles at;
-  at.update(g, theta);
+/// find_contacts_of for a drum whose shape is known only at run time (probes, tests,
+/// energies), with the lifters at `at`.
+inline WallContacts find_contacts(const Geometry& g, const LifterAngles& at, const Vec3& x,
+                                  double r) {
   if (g.lifters > 0) {
     const LifterReach reach = lifter_reach(g, at, x, r, 0.0);
     return g.end_walls ? find_contacts_of<true, true>(g, at, x, r, reach)
@@ -352,6 +352,13 @@ inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x
   }
   return g.end_walls ? find_contacts_of<false, true>(g, at, x, r, no_lifter)
                      : find_contacts_of<false, false>(g, at, x, r, no_lifter);
+}
+
+/// find_contacts with the drum turned by theta, rad.
+inline WallContacts find_contacts(const Geometry& g, double theta, const Vec3& x, double r) {
+  LifterAngles at;
+  at.update(g, theta);
+  return find_contacts(g, at, x, r);
 }
 
 }  // namespace millscope::drum
