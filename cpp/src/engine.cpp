@@ -294,10 +294,9 @@ class Sampler final : public StepObserver {
     --left_;
   }
 
-  bool after_step(const Engine& e) override {
-    if (left_ <= 0) return true;
-    const long offset = e.step_count() - rotation_start_;
-    const Torque t = e.torque();
+  void after_step(long step, const Torque& t) override {
+    if (left_ <= 0) return;
+    const long offset = step - rotation_start_;
     if (mean_) {
       sum_.total += t.total;
       sum_.shell += t.shell;
@@ -316,7 +315,6 @@ class Sampler final : public StepObserver {
       }
       last_sampled = offset;
     }
-    return left_ <= 0;
   }
 
   std::vector<double> out;

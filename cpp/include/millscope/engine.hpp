@@ -27,7 +27,8 @@
 //
 // Threads: one OpenMP team runs a whole call of advance(); pair forces go to per-thread buffers
 // (half neighbour list, no atomics) that are summed in a fixed order, so a run is reproducible
-// bit for bit at a given thread count.
+// bit for bit at a given thread count. A step has two barriers (after the drift, after the
+// pair pass); list builds and lifter refreshes run on one thread between them.
 #pragma once
 
 #include <cstddef>
@@ -109,11 +110,13 @@ constexpr std::size_t buffer_width() {
   return Law::dissipates ? 12 : 6;
 }
 
-/// Called after every step by the step loop (from one thread); returns true to stop.
+/// Told the drive torque of every step, by one thread of the step loop while the others go on
+/// with the next step: it must not look at the engine. `step` is the engine's step count
+/// after the step.
 class StepObserver {
  public:
   virtual ~StepObserver() = default;
-  virtual bool after_step(const Engine& engine) = 0;
+  virtual void after_step(long step, const Torque& torque) = 0;
 };
 
 using StepKernel = void (*)(Engine&, long steps, StepObserver* observer);

@@ -93,8 +93,10 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   const double* const inv_i = e.inv_i_.data();
   const std::uint8_t* const mat = e.mat_.data();
 
-  std::vector<StepPartial> partial(static_cast<std::size_t>(team));
-  bool stop = steps <= 0 && e.forces_valid_;
+  // Two sets of per-thread partials, by step parity: step s writes set s % 2 while the threads
+  // still read set (s - 1) % 2 to close the step before (see the step loop below).
+  std::vector<StepPartial> partial(2 * static_cast<std::size_t>(team));
+  auto partials_of = [&](long s) { return partial.data() + static_cast<std::size_t>(s & 1) * team; };
   std::string error;
 
   if (e.buffer_width_ != width || (dissipates && e.dissipative_.size() != 6 * n))
@@ -109,7 +111,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // the particles after its rows up to its last partner (buffer_end). No two threads write the
   // same place.
   double* const dissip = e.dissipative_.data();
-  auto pair_pass = [&](int t, double history_dt) {
+  auto pair_pass = [&](int t, double history_dt, StepPartial& part) {
     const std::size_t row_begin = e.row_split_[static_cast<std::size_t>(t)];
     const std::size_t own_end = e.row_split_[static_cast<std::size_t>(t) + 1];
     const std::size_t later = e.buffer_end_[static_cast<std::size_t>(t)] - own_end;  // buffered
@@ -123,7 +125,6 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     for (std::size_t c = 0; c < 12; ++c) buffered[c] = c < width ? buf + c * later : nullptr;
     for (std::size_t c = 0; c < width; ++c) std::fill(own[c] + row_begin, own[c] + own_end, 0.0);
 
-    StepPartial& part = partial[static_cast<std::size_t>(t)];
     const std::uint32_t* const start = e.list_.start().data();
     const std::uint32_t* const partner = e.list_.partner().data();
     double* const history = e.list_.history().data();
@@ -194,10 +195,18 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     }
   };
 
+  // Guard: nothing non-finite, no centre beyond the shell. Non-finite forces or torques show
+  // in the velocities after a kick.
+  auto guard = [&](std::size_t i, StepPartial& part) {
+    const double check = fx[i] + fy[i] + fz[i] + vx[i] + vy[i] + vz[i] + wx[i] + wy[i] + wz[i] +
+                         x[i] + y[i] + z[i];
+    if (!std::isfinite(check) || x[i] * x[i] + y[i] * y[i] > geom.radius * geom.radius)
+      part.bad = std::min(part.bad, i);
+  };
+
   // Per particle: sum the thread buffers, add the drum's contacts and gravity, then (kick)
   // the second half kick. Particles [lo, hi) belong to thread t.
-  auto particle_pass = [&](int t, double history_dt, bool kick) {
-    StepPartial& part = partial[static_cast<std::size_t>(t)];
+  auto particle_pass = [&](int t, double history_dt, bool kick, StepPartial& part) {
     const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
     const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
     const double omega = e.omega_;
@@ -334,16 +343,13 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         // integrator removes is their work with the full-step ones (Ledger::dissipated).
         if constexpr (dissipates) part.dissipation_shift -= (diss.dot(dv) + diss_tq.dot(dw)) * dt;
       }
-      // Guard: nothing non-finite, no centre beyond the shell.
-      const double check = fx[i] + fy[i] + fz[i] + vx[i] + vy[i] + vz[i] + wx[i] + wy[i] + wz[i];
-      if (!std::isfinite(check) || x[i] * x[i] + y[i] * y[i] > geom.radius * geom.radius)
-        part.bad = std::min(part.bad, i);
+      if (!kick) guard(i, part);  // a step's kick_drift checks it otherwise
     }
   };
 
-  // First half kick and drift for particles [lo, hi); tracks the largest move since the build.
-  auto kick_drift = [&](int t) {
-    StepPartial& part = partial[static_cast<std::size_t>(t)];
+  // First half kick and drift for particles [lo, hi); tracks the largest move since the build
+  // and guards the new state.
+  auto kick_drift = [&](int t, StepPartial& part) {
     const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
     const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
     double move2 = 0.0;
@@ -366,20 +372,20 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       }
       const double dx = x[i] - e.x_ref_[i], dy = y[i] - e.y_ref_[i];
       move2 = std::max(move2, dx * dx + dy * dy + dz * dz);
+      guard(i, part);
     }
     part.displacement2 = move2;
   };
 
-  auto reset_partials = [&] {
-    for (auto& p : partial) p = StepPartial{};
-  };
-
-  // After a pass pair: sum the per-thread partials in thread order (reproducible).
-  auto close_step = [&](double ledger_dt) {
+  // Closes a step from its partials, summed in thread order (reproducible): every thread
+  // calls it and reaches the same verdict (true: stop); the master thread alone books the
+  // torque and the ledger, tells the observer and writes the error.
+  auto close_step = [&](const StepPartial* parts, double ledger_dt, bool master, long step) {
     Torque tq;
     double damping = 0.0, friction_loss = 0.0, shift = 0.0;
     std::size_t bad = std::numeric_limits<std::size_t>::max(), homeless = bad;
-    for (const auto& p : partial) {
+    for (int b = 0; b < team; ++b) {
+      const StepPartial& p = parts[b];
       homeless = std::min(homeless, p.homeless);
       tq.shell += p.shell;
       tq.lifters += p.lifters;
@@ -390,71 +396,100 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       bad = std::min(bad, p.bad);
     }
     tq.total = tq.shell + tq.lifters + tq.ends;
-    e.torque_ = tq;
-    e.ledger_.drive_work += e.omega_ * tq.total * ledger_dt;
-    e.ledger_.damping_loss += damping * ledger_dt;
-    if (ledger_dt > 0.0) {
-      e.ledger_.friction_loss += friction_loss;
-      e.ledger_.dissipated += damping * ledger_dt + friction_loss + shift;
+    if (master) {
+      e.torque_ = tq;
+      e.ledger_.drive_work += e.omega_ * tq.total * ledger_dt;
+      e.ledger_.damping_loss += damping * ledger_dt;
+      if (ledger_dt > 0.0) {
+        e.ledger_.friction_loss += friction_loss;
+        e.ledger_.dissipated += damping * ledger_dt + friction_loss + shift;
+      }
+      if (observer != nullptr && ledger_dt > 0.0) observer->after_step(step, tq);
     }
     if (homeless != std::numeric_limits<std::size_t>::max()) {
-      error = "internal error: particle " + std::to_string(e.order_[homeless]) +
-              " touches the drum but was given no wall history (Engine::Access::refresh_walls); "
-              "please report it with the scene";
+      if (master)
+        error = "internal error: particle " + std::to_string(e.order_[homeless]) +
+                " touches the drum but was given no wall history "
+                "(Engine::Access::refresh_walls); please report it with the scene";
       return true;
     }
     if (bad != std::numeric_limits<std::size_t>::max()) {
-      error = describe_bad(e, bad);
+      if (master) error = describe_bad(e, bad);
       return true;
     }
     return false;
   };
 
+  const long first_step = e.step_;  // the step count when this call began
+  // Two barriers per step. A step's particle pass and the next step's kick and drift touch only
+  // the thread's own particles, so they need none between them; the step is closed (torque,
+  // ledger, observer, guards) after the next step's first barrier, from its set of partials.
 #pragma omp parallel num_threads(team)
   {
     const int t = omp_get_thread_num();
+    const bool master = t == 0;
+    bool failed = false;  // the same in every thread
     if (!e.forces_valid_) {
       // The forces of the initial state; the tangential history does not advance.
-#pragma omp single
-      reset_partials();
-      pair_pass(t, 0.0);
+      StepPartial* const parts = partials_of(-1);
+      parts[t] = StepPartial{};
+      pair_pass(t, 0.0, parts[t]);
 #pragma omp barrier
-      particle_pass(t, 0.0, false);
+      particle_pass(t, 0.0, false, parts[t]);
 #pragma omp barrier
-#pragma omp single
-      {
-        if (close_step(0.0)) stop = true;
-        e.forces_valid_ = true;
-      }
+      failed = close_step(parts, 0.0, master, first_step);
+      if (master && !failed) e.forces_valid_ = true;
+#pragma omp barrier
     }
-    for (long s = 0; s < steps && !stop; ++s) {
-#pragma omp single
-      reset_partials();
-      kick_drift(t);
+    // Every thread follows the drum angle and the angle of the last lifter refresh itself, so
+    // that the decisions below need no shared write.
+    double theta = e.theta_, reach_theta = e.reach_theta_;
+    for (long s = 0; !failed; ++s) {
+      StepPartial* const parts = partials_of(s);
+      if (s < steps) {
+        parts[t] = StepPartial{};
+        kick_drift(t, parts[t]);
+      }
 #pragma omp barrier
+      // Every particle has drifted and the step before is complete: close it.
+      if (s > 0 && close_step(partials_of(s - 1), dt, master, first_step + s)) break;
+      if (s == steps) break;
+      theta += e.omega_ * dt;
+      double move2 = 0.0;
+      std::size_t bad = std::numeric_limits<std::size_t>::max();
+      for (int b = 0; b < team; ++b) {
+        move2 = std::max(move2, parts[b].displacement2);
+        bad = std::min(bad, parts[b].bad);
+      }
+      const bool rebuild_now = move2 > skin_half2;
+      // The lifters have moved as far as the particles may: look again which are near.
+      const bool refresh_now =
+          Lifters && !rebuild_now && geom.radius * std::abs(theta - reach_theta) > lifter_drift;
+      if (bad != std::numeric_limits<std::size_t>::max() || rebuild_now || refresh_now) {
 #pragma omp single
-      {
-        e.theta_ += e.omega_ * dt;
-        if constexpr (Lifters) e.lifter_angles_.update(geom, e.theta_);
-        ++e.step_;
-        double move2 = 0.0;
-        for (const auto& p : partial) move2 = std::max(move2, p.displacement2);
-        if (move2 > skin_half2) {
-          rebuild(e);
-        } else if constexpr (Lifters) {
-          // The lifters have moved as far as the particles may: look again which are near.
-          if (geom.radius * std::abs(e.theta_ - e.reach_theta_) > lifter_drift) refresh_walls(e);
+        {
+          e.theta_ = theta;
+          e.step_ = first_step + s + 1;
+          if constexpr (Lifters) e.lifter_angles_.update(geom, e.theta_);
+          if (bad != std::numeric_limits<std::size_t>::max()) {
+            error = describe_bad(e, bad);
+          } else if (rebuild_now) {
+            rebuild(e);
+          } else {
+            refresh_walls(e);
+          }
         }
+        if (bad != std::numeric_limits<std::size_t>::max()) break;
+        reach_theta = theta;
+      } else if (master) {
+        // Read by nobody before the barrier after the pair pass.
+        e.theta_ = theta;
+        e.step_ = first_step + s + 1;
+        if constexpr (Lifters) e.lifter_angles_.update(geom, e.theta_);
       }
-      pair_pass(t, dt);
+      pair_pass(t, dt, parts[t]);
 #pragma omp barrier
-      particle_pass(t, dt, true);
-#pragma omp barrier
-#pragma omp single
-      {
-        if (close_step(dt)) stop = true;
-        if (!stop && observer != nullptr && observer->after_step(e)) stop = true;
-      }
+      particle_pass(t, dt, true, parts[t]);
     }
   }
   if (!error.empty()) throw std::runtime_error(error);
