@@ -61,7 +61,8 @@ void register_engine(py::module_& m) {
       .def(py::init([](std::vector<materials::Material> materials, const InArray& restitution,
                        const InArray& friction, int drum_material, const drum::Geometry& geometry,
                        const InArray& radius, const IntArray& material, double dt, double gravity,
-                       double skin, bool clamp_normal, int threads, bool reorder) {
+                       double skin, bool clamp_normal, int threads, bool reorder,
+                       bool track_energy) {
              en::Config c;
              c.materials = std::move(materials);
              c.restitution.assign(restitution.data(), restitution.data() + restitution.size());
@@ -77,17 +78,21 @@ void register_engine(py::module_& m) {
              c.skin = skin;
              c.clamp_normal = clamp_normal;
              c.reorder = reorder;
+             c.track_energy = track_energy;
              c.threads = threads;
              return en::Engine(std::move(c));
            }),
            arg("materials"), arg("restitution"), arg("friction"), arg("drum_material"),
            arg("geometry"), arg("radius"), arg("material"), arg("dt"), arg("gravity") = 9.81,
            arg("skin") = 0.0, arg("clamp_normal") = false, arg("threads") = 1,
-           arg("reorder") = true)
+           arg("reorder") = true, arg("track_energy") = true)
       .def_property_readonly("size", &en::Engine::size)
       .def_property_readonly("dt", &en::Engine::dt)
       .def_property_readonly("threads", &en::Engine::threads)
       .def_property_readonly("variant", [](const en::Engine& e) { return e.variant().describe(); })
+      .def_property_readonly("track_energy",
+                             [](const en::Engine& e) { return e.variant().track_energy; },
+                             "Whether the step books the dissipated energy (a law that dissipates)")
       .def_property_readonly("skin", &en::Engine::skin)
       .def_property_readonly("list_builds", &en::Engine::list_builds)
       .def_property_readonly("list_pairs", &en::Engine::list_pairs)

@@ -85,19 +85,20 @@ Variant choose_variant(const Config& c, const materials::PairTable& table) {
   v.one_material = used.size() == 1;
   v.lifters = c.geometry.lifters > 0;
   v.end_walls = c.geometry.end_walls;
+  v.track_energy = c.track_energy && v.law != Variant::Law::elastic;
   return v;
 }
 
 StepKernel kernel_of(const Variant& v) {
   switch (v.law) {
     case Variant::Law::hertz_mindlin:
-      return kernels::hertz_mindlin(v.one_material, v.lifters, v.end_walls);
+      return kernels::hertz_mindlin(v.one_material, v.lifters, v.end_walls, v.track_energy);
     case Variant::Law::frictionless:
-      return kernels::frictionless(v.one_material, v.lifters, v.end_walls);
+      return kernels::frictionless(v.one_material, v.lifters, v.end_walls, v.track_energy);
     case Variant::Law::elastic:
-      return kernels::elastic(v.one_material, v.lifters, v.end_walls);
+      return kernels::elastic(v.one_material, v.lifters, v.end_walls, v.track_energy);
     case Variant::Law::clamped:
-      return kernels::clamped(v.one_material, v.lifters, v.end_walls);
+      return kernels::clamped(v.one_material, v.lifters, v.end_walls, v.track_energy);
   }
   throw std::logic_error("unknown contact law");
 }
@@ -120,6 +121,7 @@ std::string Variant::describe() const {
   s += one_material ? ", one material" : ", pair table";
   s += lifters ? ", lifters" : ", no lifters";
   s += end_walls ? ", end walls" : ", periodic ends";
+  if (!track_energy && law != Law::elastic) s += ", dissipation not booked";
   return s;
 }
 
@@ -146,11 +148,11 @@ Engine::Engine(Config config)
   set_particle_constants();
   wall_block_.assign(friction ? n_ : 0, -1);  // blocks are handed out by refresh_walls
   wall_held_.assign(friction ? n_ : 0, 0);
-  // Forces and torques (6), and when the law dissipates, the dissipating force and torque (6
-  // more) per particle (engine.hpp, buffer_width). The buffers are sized by split_rows.
-  const bool dissipates = variant_.law != Variant::Law::elastic;
-  buffer_width_ = dissipates ? 12 : 6;
-  dissipative_.assign(dissipates ? 6 * n_ : 0, 0.0);
+  // Forces and torques (6), and when the step books the dissipated energy, the dissipating
+  // force and torque (6 more) per particle (engine.hpp, buffer_width). The buffers are sized by
+  // split_rows.
+  buffer_width_ = buffer_width(variant_.track_energy);
+  dissipative_.assign(variant_.track_energy ? 6 * n_ : 0, 0.0);
   buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>());
   row_split_.assign(static_cast<std::size_t>(threads_) + 1, 0);
   buffer_end_.assign(static_cast<std::size_t>(threads_), 0);

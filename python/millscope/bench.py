@@ -17,7 +17,8 @@ is cached as a checkpoint under the cache folder (``out/bench-cache`` by default
 pass ``--no-cache``, to redo it). The timed stretch starts from the cached state, so every
 thread count and repeat runs the same steps. The steps are counted by the engine's own step
 counter (the torque is sampled on whole steps, so a run takes up to 1 % more steps than
-``--steps``). The last line, ``particle_steps_per_s=<value>``, is the first scene on the most
+``--steps``). The timed runs keep the torque alone, as a campaign does, without booking the
+dissipated energy (``Simulation(track_energy=False)``; LIGGGHTS does not book it either). The last line, ``particle_steps_per_s=<value>``, is the first scene on the most
 threads.
 """
 
@@ -424,7 +425,8 @@ def run(scale: str = "paper", scenes: Sequence[str] | None = None,
         path = tumbling_state(name, scale, spin_up_s, cache_dir=cache_dir, use_cache=use_cache,
                               dt=dt, threads=max(threads), progress=progress, out=stream)
         for n_threads in threads:
-            r = measure(Simulation.load(path, threads=n_threads), steps, name)
+            r = measure(Simulation.load(path, threads=n_threads, track_energy=False), steps,
+                        name)
             rows[name, n_threads] = r
             emit(f"{name:<{width}}{r.particles:>10}{n_threads:>8}{r.dt:>11.3e}{r.steps:>8}"
                  f"{r.wall_s:>10.3f}{r.particle_steps_per_s:>12.3e}"

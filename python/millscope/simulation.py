@@ -114,12 +114,18 @@ class Simulation:
         Settled when 99 % of the particles have a kinetic energy < this x m g d.
     settle_min_s, settle_max_s : float
         Least and most simulated settling time, s.
+    track_energy : bool
+        Book the energy the dashpots and sliding take out (``energies()["dissipated"]`` and
+        its split). It costs a quarter to a third of the run time (the dissipating forces are
+        summed per particle besides the forces); the forces, the motion and the torque are
+        the same to the bit without it. Off, only the drive's work is booked and the three
+        losses read NaN. Campaigns and the benchmark run without it.
     """
 
     def __init__(self, scene: Scene, seed: int = 0, dt: float | None = None,
                  threads: int | None = None, *, skin: float | None = None,
                  settle_tolerance: float = 1e-4, settle_min_s: float = 0.2,
-                 settle_max_s: float = 3.0) -> None:
+                 settle_max_s: float = 3.0, track_energy: bool = True) -> None:
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a millscope Scene, not {type(scene).__name__}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -143,6 +149,9 @@ class Simulation:
                             ("settle_min_s", settle_min_s), ("settle_max_s", settle_max_s)):
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name} = {value!r} is not valid; it must be finite and > 0")
+        if not isinstance(track_energy, (bool, np.bool_)):
+            raise ValueError(f"track_energy = {track_energy!r} is not valid; it must be True or "
+                             "False")
         if settle_max_s < settle_min_s:
             raise ValueError(f"settle_max_s = {settle_max_s} s is not valid; it must be >= "
                              f"settle_min_s = {settle_min_s} s")
@@ -151,7 +160,7 @@ class Simulation:
         self._seed = int(seed)
         self._rng = np.random.default_rng(self._seed)
         self._settle = (float(settle_tolerance), float(settle_min_s), float(settle_max_s))
-        self._engine = _make_engine(scene, float(dt), int(threads), skin)
+        self._engine = _make_engine(scene, float(dt), int(threads), skin, bool(track_energy))
         self._phase: Phase = "empty"
         self.settle_report: SettleReport | None = None
         #: Torque of the drum's parts over the last run, N m: "shell", "lifters", "ends".
@@ -170,6 +179,11 @@ class Simulation:
     def dt(self) -> float:
         """Time step, s."""
         return float(self._engine.dt)
+
+    @property
+    def track_energy(self) -> bool:
+        """Whether the run books the dissipated energy (see the class docstring)."""
+        return bool(self._engine.track_energy)
 
     @property
     def threads(self) -> int:
@@ -227,7 +241,8 @@ class Simulation:
         drive_work = change of (kinetic + potential + elastic) + dissipated.
         The split is evaluated with the half-step velocities the forces were computed from, a
         first-order estimate: ``damping_loss + friction_loss`` exceeds ``dissipated`` by
-        O(dt / contact time), about 4 % at the default step.
+        O(dt / contact time), about 4 % at the default step. Without ``track_energy`` the
+        three losses are NaN.
         """
         e = self._engine
         out = {"kinetic": e.kinetic_energy(), "potential": e.potential_energy(),
@@ -391,6 +406,7 @@ class Simulation:
             "dt": self.dt,
             "threads": self.threads,
             "skin": float(self._engine.skin),
+            "track_energy": self.track_energy,
             "phase": self._phase,
             "settle": list(self._settle),
             "rng_state": self._rng.bit_generator.state,
@@ -403,11 +419,13 @@ class Simulation:
         return path
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str], *, threads: int | None = None) -> Simulation:
+    def load(cls, path: str | os.PathLike[str], *, threads: int | None = None,
+             track_energy: bool | None = None) -> Simulation:
         """Reads a checkpoint written by :meth:`save`.
 
         ``threads`` defaults to the thread count of the saved run (needed for a bit-for-bit
-        continuation). A damaged file, a file that is not a checkpoint or one from another
+        continuation), ``track_energy`` to the saved run's (a run continued without it keeps
+        the same motion; its losses read NaN from then on). A damaged file, a file that is not a checkpoint or one from another
         millscope version raises :class:`CheckpointError`.
         """
         path = Path(path)
@@ -436,7 +454,9 @@ class Simulation:
             sim = cls(scene, seed=meta["seed"], dt=meta["dt"],
                       threads=meta["threads"] if threads is None else threads,
                       skin=meta["skin"], settle_tolerance=tol, settle_min_s=t_min,
-                      settle_max_s=t_max)
+                      settle_max_s=t_max,
+                      track_energy=meta.get("track_energy", True) if track_energy is None
+                      else track_energy)
             snapshot: dict[str, Any] = dict(arrays)
             for k, v in meta["engine_scalars"].items():
                 snapshot[k] = tuple(v) if isinstance(v, list) else v
@@ -462,7 +482,8 @@ def _available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None) -> Any:
+def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
+                 track_energy: bool) -> Any:
     drum = scene.drum
     lifters = drum.lifters
     geometry_args: dict[str, Any] = {
@@ -480,7 +501,8 @@ def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None) -> A
     return _core.Engine(materials, restitution, friction, scene.material_index(drum.material),
                         geometry, scene.particle_radii(), scene.particle_materials(), dt,
                         gravity=scene.gravity, skin=0.0 if skin is None else skin,
-                        clamp_normal=scene.clamp_normal_force, threads=threads)
+                        clamp_normal=scene.clamp_normal_force, threads=threads,
+                        track_energy=track_energy)
 
 
 def _fill_positions(scene: Scene, rng: np.random.Generator) -> NDArray[np.float64]:

@@ -56,6 +56,7 @@ struct Config {
   double skin = 0.0;                // m; 0: a default of 0.1 x the smallest radius... see Engine
   bool clamp_normal = false;        // F_n = max(F_n, 0)
   bool reorder = true;              // store the particles in cell order at each list build
+  bool track_energy = true;         // book the dissipated energy (Ledger); off: only drive_work
   int threads = 1;
 };
 
@@ -95,6 +96,7 @@ struct Variant {
   bool one_material = false;
   bool lifters = false;
   bool end_walls = true;
+  bool track_energy = true;  // books the dissipated energy (only a law that dissipates)
   std::string describe() const;
 };
 
@@ -103,11 +105,11 @@ inline constexpr std::size_t wall_slots = 5;
 
 class Engine;
 
-/// Doubles per particle in each thread's pair buffer: force and torque (6), and with a law that
-/// dissipates, the dissipating force and its torque (6 more) for Ledger::dissipated.
-template <class Law>
-constexpr std::size_t buffer_width() {
-  return Law::dissipates ? 12 : 6;
+/// Doubles per particle in each thread's pair buffer: force and torque (6), and when the step
+/// books the dissipated energy (a law that dissipates, Config::track_energy), the dissipating
+/// force and its torque (6 more) for Ledger::dissipated.
+constexpr std::size_t buffer_width(bool books_dissipation) {
+  return books_dissipation ? 12 : 6;
 }
 
 /// Told the drive torque of every step, by one thread of the step loop while the others go on
@@ -123,10 +125,10 @@ using StepKernel = void (*)(Engine&, long steps, StepObserver* observer);
 
 /// The step kernels of each contact law (src/engine_law_*.cpp), for the scene's shape.
 namespace kernels {
-StepKernel hertz_mindlin(bool one_material, bool lifters, bool end_walls);
-StepKernel frictionless(bool one_material, bool lifters, bool end_walls);
-StepKernel elastic(bool one_material, bool lifters, bool end_walls);
-StepKernel clamped(bool one_material, bool lifters, bool end_walls);
+StepKernel hertz_mindlin(bool one_material, bool lifters, bool end_walls, bool track_energy);
+StepKernel frictionless(bool one_material, bool lifters, bool end_walls, bool track_energy);
+StepKernel elastic(bool one_material, bool lifters, bool end_walls, bool track_energy);
+StepKernel clamped(bool one_material, bool lifters, bool end_walls, bool track_energy);
 }  // namespace kernels
 
 /// The engine's state and its step loop.

@@ -32,7 +32,7 @@ struct alignas(64) StepPartial {
 };
 
 struct Engine::Access {
-  template <class Law, bool OneMaterial, bool Lifters, bool EndWalls>
+  template <class Law, bool OneMaterial, bool Lifters, bool EndWalls, bool Tally>
   static void run(Engine& e, long steps, StepObserver* observer);
 
   static void rebuild(Engine& e);
@@ -41,13 +41,16 @@ struct Engine::Access {
   static std::string describe_bad(const Engine& e, std::size_t i);
 };
 
-template <class Law, bool OneMaterial, bool Lifters, bool EndWalls>
+template <class Law, bool OneMaterial, bool Lifters, bool EndWalls, bool Tally>
 void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   using contact::Vec3;
   constexpr std::size_t hs = Law::history_size;  // per pair-contact history, doubles
   constexpr bool friction = Law::has_friction;
-  constexpr bool dissipates = Law::dissipates;
-  constexpr std::size_t width = buffer_width<Law>();  // per-thread buffer, x n doubles
+  // Whether the step books the dissipated energy (Ledger): the dissipating forces summed per
+  // particle, the dashpots' power and the sliding losses. Without it (Config::track_energy)
+  // the forces are the same to the bit and only the drive work is booked.
+  constexpr bool dissipates = Law::dissipates && Tally;
+  constexpr std::size_t width = buffer_width(dissipates);  // per-thread buffer, x n doubles
   static_assert(!friction || hs == 3, "the wall history slots hold 3 doubles per contact");
   static_assert(hs == 0 || hs == 3,
                 "the pair history is the tangential spring alone, odd under swapping the pair "
@@ -170,7 +173,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         put(0, pf.force_i, -pf.force_i);
         if constexpr (friction) {
           put(3, pf.torque_i, pf.torque_j);
-          part.friction_loss += pf.friction_loss;
+          if constexpr (dissipates) part.friction_loss += pf.friction_loss;
         }
         if constexpr (dissipates) {
           put(6, pf.dissipative, -pf.dissipative);
@@ -306,7 +309,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         }
         if constexpr (friction) {
           tq += pf.torque_i;
-          part.friction_loss += pf.friction_loss;
+          if constexpr (dissipates) part.friction_loss += pf.friction_loss;
         }
       }
       if constexpr (friction) {
@@ -400,7 +403,11 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       e.torque_ = tq;
       e.ledger_.drive_work += e.omega_ * tq.total * ledger_dt;
       e.ledger_.damping_loss += damping * ledger_dt;
-      if (ledger_dt > 0.0) {
+      if (ledger_dt > 0.0 && Law::dissipates && !Tally) {
+        // not booked: unknown from here on
+        e.ledger_.damping_loss = e.ledger_.friction_loss = e.ledger_.dissipated =
+            std::numeric_limits<double>::quiet_NaN();
+      } else if (ledger_dt > 0.0) {
         e.ledger_.friction_loss += friction_loss;
         e.ledger_.dissipated += damping * ledger_dt + friction_loss + shift;
       }
@@ -496,15 +503,27 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
 }
 
 /// The kernel of a law for the scene's shape, chosen once per engine.
-template <class Law>
-StepKernel select_kernel(bool one_material, bool lifters, bool end_walls) {
+template <class Law, bool Tally>
+StepKernel select_shape(bool one_material, bool lifters, bool end_walls) {
   using A = Engine::Access;
   if (one_material) {
-    if (lifters) return end_walls ? &A::run<Law, true, true, true> : &A::run<Law, true, true, false>;
-    return end_walls ? &A::run<Law, true, false, true> : &A::run<Law, true, false, false>;
+    if (lifters)
+      return end_walls ? &A::run<Law, true, true, true, Tally> : &A::run<Law, true, true, false, Tally>;
+    return end_walls ? &A::run<Law, true, false, true, Tally> : &A::run<Law, true, false, false, Tally>;
   }
-  if (lifters) return end_walls ? &A::run<Law, false, true, true> : &A::run<Law, false, true, false>;
-  return end_walls ? &A::run<Law, false, false, true> : &A::run<Law, false, false, false>;
+  if (lifters)
+    return end_walls ? &A::run<Law, false, true, true, Tally> : &A::run<Law, false, true, false, Tally>;
+  return end_walls ? &A::run<Law, false, false, true, Tally> : &A::run<Law, false, false, false, Tally>;
+}
+
+/// ... and whether it books the dissipated energy (only a law that dissipates has two).
+template <class Law>
+StepKernel select_kernel(bool one_material, bool lifters, bool end_walls, bool track_energy) {
+  if constexpr (Law::dissipates) {
+    if (track_energy) return select_shape<Law, true>(one_material, lifters, end_walls);
+  }
+  (void)track_energy;
+  return select_shape<Law, false>(one_material, lifters, end_walls);
 }
 
 }  // namespace millscope::engine
