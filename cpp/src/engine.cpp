@@ -524,10 +524,13 @@ void Engine::restore(const Snapshot& s) {
   forces_valid_ = s.forces_valid;
   torque_ = s.torque;
   ledger_ = s.ledger;
-  Access::split_rows(*this);
   // Which lifters are in reach and who keeps wall history change no force: a fresh look is
-  // valid (refresh_walls), and with the list not yet built, the first step builds it.
-  if (list_.builds() > 0) Access::refresh_walls(*this);
+  // valid (refresh_walls). With the list not yet built (an engine that never stepped), the
+  // first step builds it, and splits the rows among the threads.
+  if (list_.builds() > 0) {
+    Access::split_rows(*this);
+    Access::refresh_walls(*this);
+  }
 }
 
 void Engine::Access::rebuild(Engine& e) {

@@ -127,12 +127,14 @@ class VerletList {
   /// do not fit together for n spheres.
   void restore(std::size_t n, std::vector<std::uint32_t> start, std::vector<std::uint32_t> partner,
                std::vector<double> history, long builds) {
-    const bool fits = start.size() == n + 1 && start.front() == 0 &&
-                      start.back() == partner.size() &&
-                      std::is_sorted(start.begin(), start.end()) &&
-                      history.size() == partner.size() * history_size_ &&
-                      std::all_of(partner.begin(), partner.end(),
-                                  [n](std::uint32_t p) { return p < n; });
+    // A list never built (a checkpoint of an engine that has not stepped) is empty.
+    const bool never_built = builds == 0 && start.empty() && partner.empty() && history.empty();
+    const bool fits = never_built || (start.size() == n + 1 && start.front() == 0 &&
+                                      start.back() == partner.size() &&
+                                      std::is_sorted(start.begin(), start.end()) &&
+                                      history.size() == partner.size() * history_size_ &&
+                                      std::all_of(partner.begin(), partner.end(),
+                                                  [n](std::uint32_t p) { return p < n; }));
     if (!fits) {
       throw std::invalid_argument("the saved neighbour list does not fit " + std::to_string(n) +
                                   " particles with " + std::to_string(history_size_) +
