@@ -100,3 +100,34 @@ def test_trapezoidal_lifters_end_to_end() -> None:
     assert near_slant > 0
     # no particle is pushed into a lifter deeper than the hardest possible impact would press it
     assert sim.max_overlap_ratio() < hertz_overlap_bound(scene, 0.71)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_energy_ledger_changes_nothing_in_the_motion(threads: int) -> None:
+    """Without the energy ledger the step sums the same forces in the same order: the torque
+    and the positions are the same to the bit, the drive work too; only the losses go NaN."""
+    scene = ms.presets.pilot_mill(0.71, None, scale="tiny")
+    runs = []
+    for track in (True, False):
+        sim = ms.Simulation(scene, seed=3, threads=threads, track_energy=track)
+        assert sim.track_energy is track
+        rec = sim.run(0.2, progress=False)
+        runs.append((sim, rec))
+    (on, rec_on), (off, rec_off) = runs
+    assert np.abs(rec_on.torque_Nm).max() > 0  # the charge works against the drum
+    assert np.array_equal(rec_on.torque_Nm, rec_off.torque_Nm)
+    assert np.array_equal(on.positions, off.positions)
+    e_on, e_off = on.energies(), off.energies()
+    assert e_on["drive_work"] == e_off["drive_work"] and e_on["drive_work"] > 0
+    assert e_on["dissipated"] > 0
+    assert all(np.isnan(e_off[k]) for k in ("dissipated", "damping_loss", "friction_loss"))
+
+
+def test_track_energy_is_kept_by_a_checkpoint(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    scene = ms.presets.pilot_mill(0.71, None, scale="tiny")
+    sim = ms.Simulation(scene, seed=0, threads=1, track_energy=False)
+    path = sim.save(tmp_path / "c.npz")
+    assert ms.Simulation.load(path).track_energy is False
+    assert ms.Simulation.load(path, track_energy=True).track_energy is True
+    with pytest.raises(ValueError, match=r"track_energy = 'no' is not valid"):
+        ms.Simulation(scene, track_energy="no")  # type: ignore[arg-type]
