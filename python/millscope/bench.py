@@ -233,7 +233,8 @@ def tumbling_state(name: str, scale: str, spin_up_s: float, *,
     if use_cache and path.exists():
         return path
     path.parent.mkdir(parents=True, exist_ok=True)
-    sim = Simulation(build_scene(name, scale), seed=_SEED, dt=dt, threads=threads)
+    sim = Simulation(build_scene(name, scale), seed=_SEED, dt=dt, threads=threads,
+                     track_energy=False)
     t0 = time.perf_counter()
     sim.run(spin_up_s, sample_dt=_SAMPLE_DT, progress=progress)
     print(f"  prepared {name} ({sim.scene.n_particles} particles): fill, settle and "
