@@ -10,7 +10,7 @@ import pytest
 from scipy import stats
 
 import millscope as ms
-from millscope.fit import OutsideCalibrationWarning, per_unit
+from millscope.fit import OutsideCalibrationWarning, log_fit_coefficients, per_unit
 from millscope.synthetic import SyntheticTorque, synthetic_record
 
 
@@ -57,6 +57,22 @@ def test_per_unit_divides_by_the_largest() -> None:
     np.testing.assert_allclose(per_unit([4.0, 2.0, 1.0]), [1.0, 0.5, 0.25])
     with pytest.raises(ValueError, match="positive maximum"):
         per_unit([0.0, 0.0])
+    np.testing.assert_allclose(per_unit([[4.0, 2.0], [1.0, 3.0]]), [[1.0, 0.5], [1 / 3, 1.0]])
+    with pytest.raises(ValueError, match="positive maximum"):
+        per_unit([[1.0, 2.0], [0.0, 0.0]])
+
+
+def test_log_fit_coefficients_fit_every_row_as_scipy_does(rng) -> None:
+    x = np.arange(1, 8)
+    rows = -0.45 * np.log(x) + 1.0 + rng.normal(0, 0.05, (5, x.size))
+    a, b = log_fit_coefficients(x, rows)
+    assert a.shape == b.shape == (5,)
+    for k, row in enumerate(rows):
+        ref = stats.linregress(np.log(x), row)
+        assert a[k] == pytest.approx(ref.slope, rel=1e-10)
+        assert b[k] == pytest.approx(ref.intercept, rel=1e-10)
+    with pytest.raises(ValueError, match=r"shape \(7,\) or \(m, 7\)"):
+        log_fit_coefficients(x, rows[:, :6])
 
 
 @pytest.fixture(scope="module")

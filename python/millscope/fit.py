@@ -1,9 +1,10 @@
-"""Log fit of energy against filling, calibration, and the filling estimate (paper section 6.4).
+"""Calibration and the filling estimate (paper section 6.4).
 
 The paper fits the per-unit spectral energy y against the load level x (1..7, particle filling in
-units of 40 %) with y = a ln(x) + b (Table 6). A :class:`Calibration` stores such a fit with the
-reference energy that made it per-unit and the analysis settings, so that a new record analysed
-the same way gives a filling estimate x = exp((y - b) / a).
+units of 40 %) with y = a ln(x) + b (Table 6; :mod:`millscope.logfit`, re-exported here). A
+:class:`Calibration` stores such a fit with the reference energy that made it per-unit and the
+analysis settings, so that a new record analysed the same way gives a filling estimate
+x = exp((y - b) / a).
 """
 
 from __future__ import annotations
@@ -16,135 +17,19 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
-from scipy import stats
-
 from ._files import atomic_write, read_json
+from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 from .record import TorqueRecord
 from .spectral import RemoveItem, lifter_harmonic_hz, spectral_energy
 
-__all__ = ["LogFit", "log_fit", "Calibration", "FillEstimate", "estimate_fill",
-           "OutsideCalibrationWarning"]
+__all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit", "Calibration",
+           "FillEstimate", "estimate_fill", "OutsideCalibrationWarning"]
 
 CALIBRATION_FORMAT = "millscope-calibration-1"
 
 
 class OutsideCalibrationWarning(UserWarning):
     """A filling estimate lies outside the range of levels the calibration was made from."""
-
-
-@dataclass(frozen=True)
-class LogFit:
-    """Least-squares fit y = a ln(x) + b.
-
-    Attributes
-    ----------
-    a, b : float
-        Slope against ln(x) and intercept (units of y).
-    r2 : float
-        Coefficient of determination.
-    a_stderr, b_stderr : float
-        Standard errors of a and b (nan with only 2 points).
-    n : int
-        Number of points.
-    x_min, x_max : float
-        Range of x fitted.
-    ln_x_mean, ln_x_sxx, residual_std : float
-        Mean of ln(x), sum of squared deviations of ln(x), and the residual standard deviation;
-        they give prediction intervals.
-    """
-
-    a: float
-    b: float
-    r2: float
-    a_stderr: float
-    b_stderr: float
-    n: int
-    x_min: float
-    x_max: float
-    ln_x_mean: float
-    ln_x_sxx: float
-    residual_std: float
-
-    def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
-        """y = a ln(x) + b."""
-        return self.a * np.log(np.asarray(x, dtype=np.float64)) + self.b
-
-    def inverse(self, y: ArrayLike) -> NDArray[np.float64] | float:
-        """x = exp((y - b) / a)."""
-        if self.a == 0:
-            raise ValueError("the fit has slope a = 0; y does not determine x")
-        result = np.exp((np.asarray(y, dtype=np.float64) - self.b) / self.a)
-        return float(result) if np.ndim(result) == 0 else result
-
-    def prediction_half_width(self, x: float, confidence: float = 0.95,
-                              observation_std: float = 0.0) -> float:
-        """Half-width of the prediction interval of a new y at x (units of y).
-
-        The new observation's own scatter is the larger of the fit's residual standard
-        deviation and ``observation_std`` (what the new y is known to scatter by, e.g. the
-        sampling spread of its energy): a fit through few points can underestimate it.
-        """
-        if self.n < 3 or not np.isfinite(self.residual_std):
-            return math.nan
-        t = stats.t.ppf(0.5 + confidence / 2, self.n - 2)
-        u = math.log(x)
-        mean_var = self.residual_std**2 * (1 / self.n + (u - self.ln_x_mean) ** 2 / self.ln_x_sxx)
-        new_var = max(self.residual_std, observation_std) ** 2
-        return float(t * math.sqrt(mean_var + new_var))
-
-    def equation(self) -> str:
-        """The fit as the paper writes it, e.g. ``y = -0.423 ln(x) + 0.9279``."""
-        sign = "+" if self.b >= 0 else "-"
-        return f"y = {self.a:.4g} ln(x) {sign} {abs(self.b):.4g}"
-
-
-def log_fit(x: ArrayLike, y: ArrayLike) -> LogFit:
-    """Fit y = a ln(x) + b by least squares (paper Table 6).
-
-    Parameters
-    ----------
-    x : array_like
-        Positive abscissae (load levels).
-    y : array_like
-        Values (per-unit energies).
-
-    Raises
-    ------
-    ValueError
-        for fewer than 2 points, non-positive or non-finite x, non-finite y, mismatched lengths
-        or all x equal.
-    """
-    xs = np.asarray(x, dtype=np.float64)
-    ys = np.asarray(y, dtype=np.float64)
-    if xs.ndim != 1 or xs.shape != ys.shape:
-        raise ValueError(f"x and y must be 1-D of equal length; got shapes {xs.shape}, {ys.shape}")
-    if xs.size < 2:
-        raise ValueError(f"log_fit needs at least 2 points; got {xs.size}")
-    if not (np.all(np.isfinite(xs)) and np.all(xs > 0)):
-        raise ValueError(f"x must be finite and > 0 for ln(x); got {xs.tolist()}")
-    if not np.all(np.isfinite(ys)):
-        raise ValueError(f"y must be finite; got {ys.tolist()}")
-    u = np.log(xs)
-    sxx = float(np.sum((u - u.mean()) ** 2))
-    if sxx == 0:
-        raise ValueError("all x are equal; a slope cannot be fitted")
-    a, b = np.polyfit(u, ys, 1)
-    residuals = ys - (a * u + b)
-    ss_res = float(np.sum(residuals**2))
-    ss_tot = float(np.sum((ys - ys.mean()) ** 2))
-    r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else 1.0
-    n = xs.size
-    if n > 2:
-        s = math.sqrt(ss_res / (n - 2))
-        a_se = s / math.sqrt(sxx)
-        b_se = s * math.sqrt(1 / n + u.mean() ** 2 / sxx)
-    else:
-        s = a_se = b_se = math.nan
-    return LogFit(a=float(a), b=float(b), r2=r2, a_stderr=a_se, b_stderr=b_se, n=n,
-                  x_min=float(xs.min()), x_max=float(xs.max()), ln_x_mean=float(u.mean()),
-                  ln_x_sxx=sxx, residual_std=s)
 
 
 @dataclass(frozen=True)
@@ -265,11 +150,3 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
                       f"{cal.fit.x_min:g} .. {cal.fit.x_max:g}", OutsideCalibrationWarning,
                       stacklevel=2)
     return FillEstimate(level=float(level), interval=interval, energy_pu=y, energy=e.energy)
-
-
-def per_unit(energies: ArrayLike) -> NDArray[np.float64]:
-    """Energies divided by the largest of the group (DESIGN.md section 4)."""
-    e = np.asarray(energies, dtype=np.float64)
-    if e.size == 0 or not np.all(np.isfinite(e)) or e.max() <= 0:
-        raise ValueError(f"energies must be finite with a positive maximum; got {e.tolist()}")
-    return e / e.max()
