@@ -1,12 +1,15 @@
 """One torque block analysed the paper's way (Fig. 3): mean, LTH, filtered energy.
 
 :func:`analyze_block` is what ``python -m millscope analyze`` runs, usable from scripts too.
+:class:`AnalysisSettings` says how a campaign analyses its cases (block, bandwidth, window).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from .record import TorqueRecord
 from .spectral import (
@@ -18,7 +21,9 @@ from .spectral import (
     spectral_energy,
 )
 
-__all__ = ["BlockAnalysis", "analyze_block"]
+__all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block"]
+
+WINDOWS = ("hann", "hann_periodic", "rectangular")
 
 
 @dataclass(frozen=True)
@@ -101,3 +106,58 @@ def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
                              window=window, resolution_hz=resolution_hz, band=band_hz)
     return BlockAnalysis(mean_torque_Nm=block.mean_torque_Nm, lth_expected_hz=lth_hz, lth=lth,
                          energy=energy, lines_hz=kept_lines, record_length_s=block.duration_s)
+
+
+# -- how a campaign analyses its cases ---------------------------------------------------------
+@dataclass(frozen=True)
+class AnalysisSettings:
+    """How the cases of a campaign are analysed (:class:`~millscope.campaign.Campaign`).
+
+    Attributes
+    ----------
+    block : (float, float)
+        The block ``t1 <= t < t2``, s from the start of rotation, with 0 <= t1 < t2.
+    bandwidth : float
+        Full width of the bands removed around the mean and the LTH, Hz, > 0.
+    window : {"hann", "hann_periodic", "rectangular"}
+    """
+
+    block: tuple[float, float]
+    bandwidth: float = 0.3
+    window: str = "hann"
+
+    def __post_init__(self) -> None:
+        try:
+            t1, t2 = (float(t) for t in self.block)
+        except (TypeError, ValueError):
+            raise ValueError(f"AnalysisSettings.block = {self.block!r} is not valid; it must "
+                             "be a pair (t1, t2) of times in s") from None
+        if not (math.isfinite(t1) and math.isfinite(t2) and 0 <= t1 < t2):
+            raise ValueError(f"AnalysisSettings.block = {self.block!r} is not valid; it must "
+                             "be (t1, t2) with 0 <= t1 < t2, s")
+        if not (isinstance(self.bandwidth, (int, float)) and math.isfinite(self.bandwidth)
+                and self.bandwidth > 0):
+            raise ValueError(f"AnalysisSettings.bandwidth = {self.bandwidth!r} is not valid; "
+                             "it must be > 0 Hz")
+        if self.window not in WINDOWS:
+            raise ValueError(f"AnalysisSettings.window = {self.window!r} is not valid; it must "
+                             f"be one of {', '.join(WINDOWS)}")
+        object.__setattr__(self, "block", (t1, t2))
+        object.__setattr__(self, "bandwidth", float(self.bandwidth))
+
+    @property
+    def block_s(self) -> float:
+        """Block length t2 - t1, s."""
+        return self.block[1] - self.block[0]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON data: ``{"block": [t1, t2], "bandwidth": ..., "window": ...}``."""
+        return {"block": list(self.block), "bandwidth": self.bandwidth, "window": self.window}
+
+    @classmethod
+    def from_dict(cls, data: Any) -> AnalysisSettings:
+        """The settings of a :meth:`to_dict` dict (ValueError when damaged)."""
+        if not isinstance(data, dict) or set(data) != {"block", "bandwidth", "window"}:
+            raise ValueError(f"analysis settings must be an object with keys block, bandwidth, "
+                             f"window; got {data!r}")
+        return cls(tuple(data["block"]), data["bandwidth"], data["window"])
