@@ -8,6 +8,7 @@ from typing import Any as _Any
 
 from . import campaign, contact, drivetrain, presets
 from ._core import build_info as _build_info
+from .analysis import GroupAnalysis, analyze_campaign
 from .campaign import Campaign, Case, CaseResult, RunSettings
 from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
 from .record import RecordError, TorqueRecord
@@ -50,6 +51,7 @@ __all__ = [
     "SettleWarning",
     "Simulation",
     "FillEstimate",
+    "GroupAnalysis",
     "LogFit",
     "Peak",
     "RecordError",
@@ -58,6 +60,7 @@ __all__ = [
     "Spectrum",
     "TorqueRecord",
     "__version__",
+    "analyze_campaign",
     "band_stop",
     "campaign",
     "contact",
