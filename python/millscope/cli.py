@@ -15,7 +15,6 @@ from pathlib import Path
 from . import __version__
 
 EXIT_BAD_INPUT = 2
-DECIMATE_FACTOR = 2.5  # records faster than this x the analysis band are decimated to it
 
 
 class CliError(Exception):
@@ -62,22 +61,20 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     """Analyse one torque file: mean, LTH, spectral energy; write plots."""
     from . import plots
     from .analysis import analyze_block
-    from .drivetrain import DriveTrain, decimate
+    from .drivetrain import DriveTrain, decimate_record
     from .record import TorqueRecord
     from .spectral import RemoveItem, band_stop, spectrum
 
-    record = TorqueRecord.load(args.file)
+    raw = TorqueRecord.load(args.file)
     lines: list[float] = []
     if args.drive is not None:
         drive = DriveTrain.load(args.drive)
         lines = drive.frequencies_hz(max_hz=args.band_hz, include_lth=False)
-    # The anti-aliasing filter rolls off over the top fifth below the new Nyquist frequency, so
-    # records are brought to 2.5x the band (not 2x) and only the band itself is counted.
-    target_hz = DECIMATE_FACTOR * args.band_hz
-    if record.sample_rate_hz > target_hz * (1 + 1e-9):
-        t, q = decimate(record.time_s, record.torque_Nm, target_hz)
-        print(f"decimated from {record.sample_rate_hz:g} Hz to {target_hz:g} Hz (anti-aliased)")
-        record = TorqueRecord(t, q, {**record.meta, "decimated_to_hz": target_hz})
+    # only the band itself is counted, from a record decimated to 2.5x the band when faster
+    record = decimate_record(raw, args.band_hz)
+    if record is not raw:
+        print(f"decimated from {raw.sample_rate_hz:g} Hz to {record.sample_rate_hz:g} Hz "
+              "(anti-aliased)")
     t1 = record.time_s[0] if args.t_from is None else args.t_from
     t2 = record.time_s[-1] + record.dt if args.t_to is None else args.t_to
     block = record.block(t1, t2)
