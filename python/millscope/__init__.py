@@ -11,6 +11,7 @@ from ._core import build_info as _build_info
 from .analysis import GroupAnalysis, analyze_campaign
 from .campaign import Campaign, Case, CaseResult, RunSettings
 from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
+from .monitoring import WindowEstimate, monitor
 from .record import RecordError, TorqueRecord
 from .scene import Drum, Fraction, Lifters, Material, Pair, Scene
 from .simulation import CheckpointError, SettleWarning, Simulation
@@ -59,6 +60,7 @@ __all__ = [
     "SpectralEnergy",
     "Spectrum",
     "TorqueRecord",
+    "WindowEstimate",
     "__version__",
     "analyze_campaign",
     "band_stop",
@@ -69,6 +71,7 @@ __all__ = [
     "find_peak",
     "lifter_harmonic_hz",
     "log_fit",
+    "monitor",
     "plots",
     "presets",
     "spectral_energy",
