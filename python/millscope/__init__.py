@@ -29,7 +29,7 @@ from .spectral import (
 
 __version__: str = _build_info()["version"]
 
-_LAZY_SUBMODULES = ("plots",)  # matplotlib is imported only when figures are asked for
+_LAZY_SUBMODULES = ("plots", "report")  # matplotlib is imported only when figures are asked for
 
 
 def __getattr__(name: str) -> _Any:
@@ -74,6 +74,7 @@ __all__ = [
     "monitor",
     "plots",
     "presets",
+    "report",
     "spectral_energy",
     "spectrum",
     "window_factors",

@@ -1,8 +1,8 @@
 """Command line: ``python -m millscope`` and the ``millscope`` script.
 
 Subcommands: ``info`` (build facts), ``analyze`` (one torque file), ``monitor`` (a filling
-estimate per window of a long record), ``demo`` (the main job), ``bench`` (engine throughput,
-:mod:`millscope.bench`).
+estimate per window of a long record), ``report`` (a campaign store's report), ``demo`` (the
+main job), ``bench`` (engine throughput, :mod:`millscope.bench`).
 Bad input ends with one line ``millscope: error: ...`` on stderr and exit code 2.
 """
 
@@ -146,6 +146,17 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_report(args: argparse.Namespace) -> int:
+    """The report of a campaign store."""
+    from .report import write_report
+
+    path = write_report(args.store, args.out, progress=not args.no_progress,
+                        block=None if args.block is None else tuple(args.block),
+                        bootstrap=args.bootstrap)
+    print(f"wrote {path}")
+    return 0
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     """The main job: analyse a family of synthetic records end to end."""
     from .demo import run_demo
@@ -209,6 +220,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--confidence", type=_confidence, default=0.95,
                    help="confidence of the intervals, in (0, 1) (default 0.95)")
     p.set_defaults(func=cmd_monitor)
+
+    p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",
+                       description="Analyses a campaign store (paper section 6) and writes "
+                                   "report.md with the Table 6 analogue, per-group and per-case "
+                                   "tables, Figs. 9-15 as PNG and a calibration per group.")
+    p.add_argument("store", help="campaign store directory")
+    p.add_argument("--out", default=None, help="output folder (default STORE/report)")
+    p.add_argument("--block", type=float, nargs=2, metavar=("T1", "T2"), default=None,
+                   help="block to analyse, s (default: as the campaign analysed it)")
+    p.add_argument("--bootstrap", type=_positive_int, default=1000,
+                   help="bootstrap replicates (default 1000)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_report)
 
     p = sub.add_parser("demo", help="the main job: a synthetic study written to --out")
     p.add_argument("--out", default="out", help="output folder (default out)")
