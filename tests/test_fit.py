@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import warnings
 
 import numpy as np
@@ -136,6 +137,28 @@ def test_calibration_round_trip_and_damaged_files(tmp_path, calibration) -> None
     with pytest.raises(ValueError, match="reference_energy = 0"):
         ms.Calibration(fit=calibration.fit, reference_energy=0.0, lifters=16, rotation_hz=0.5)
 
+
+
+def test_a_two_point_calibration_is_standard_json(tmp_path) -> None:
+    """A fit through 2 levels has no standard errors: written as null (JSON has no NaN),
+    read back as nan."""
+    fit = ms.log_fit([1.0, 3.0], [1.0, 0.5])
+    assert math.isnan(fit.a_stderr)
+    cal = ms.Calibration(fit=fit, reference_energy=2.0, lifters=16, rotation_hz=0.5)
+    path = cal.save(tmp_path / "cal.json")
+
+    def refuse(name: str) -> None:
+        raise AssertionError(f"{name} is not standard JSON")
+
+    data = json.loads(path.read_text(), parse_constant=refuse)
+    assert data["fit"]["a_stderr"] is None and data["fit"]["a"] == fit.a
+    loaded = ms.Calibration.load(path)
+    assert math.isnan(loaded.fit.a_stderr) and math.isnan(loaded.fit.residual_std)
+    assert (loaded.fit.a, loaded.fit.b, loaded.fit.n) == (fit.a, fit.b, 2)
+    data["fit"] = [1, 2]
+    (tmp_path / "bad.json").write_text(json.dumps(data))
+    with pytest.raises(ValueError, match="incomplete or damaged"):
+        ms.Calibration.load(tmp_path / "bad.json")
 
 # -- calibration from a campaign's results ---------------------------------------------------------
 @pytest.fixture(scope="module")

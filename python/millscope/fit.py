@@ -189,8 +189,15 @@ class Calibration:
         return ["mean", lifter_harmonic_hz(self.lifters, self.rotation_hz), *self.extra_lines_hz]
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write the calibration as JSON, atomically."""
+        """Write the calibration as JSON, atomically.
+
+        The fit's undefined values (the standard errors of a fit through 2 points) are written
+        as ``null``, not as the ``NaN`` that standard JSON does not have; :meth:`load` reads
+        them back as nan.
+        """
         data = {"format": CALIBRATION_FORMAT, **asdict(self)}
+        data["fit"] = {k: _plain(v) if isinstance(v, float) else v
+                       for k, v in data["fit"].items()}
         target = Path(path)
         with atomic_write(target, "w") as fh:
             json.dump(data, fh, indent=2)
@@ -206,10 +213,11 @@ class Calibration:
             raise ValueError(f"{source}: not a millscope calibration (expected format "
                              f"{' or '.join(repr(f) for f in READABLE_FORMATS)})")
         try:
-            data["fit"] = LogFit(**data["fit"])
+            data["fit"] = LogFit(**{k: math.nan if v is None else v
+                                    for k, v in data["fit"].items()})
             data["extra_lines_hz"] = tuple(data.get("extra_lines_hz", ()))
             return cls(**data)
-        except (KeyError, TypeError) as exc:
+        except (AttributeError, KeyError, TypeError) as exc:
             raise ValueError(f"{source}: calibration is incomplete or damaged ({exc})") from None
 
 
