@@ -233,11 +233,14 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
             "",
             table6_markdown(groups),
             f"Intervals: {percent} percentile bootstrap, {bootstrap} replicates (seed {seed}). "
-            "At a level with repeats (other seeds) their energies are resampled; at a level "
-            f"with one case, the energies of up to {sub_blocks} sub-blocks of its block are. "
-            "Every replicate is made per unit and fitted again. *seeds* / *blocks* / *none* in "
-            "the last column say which; *none* (a block too short to cut) leaves the group "
-            "without intervals.",
+            "At a level with repeats (other seeds), the mean of its repeats is resampled from "
+            "the relative seed-to-seed deviations pooled over all such levels of the group; at "
+            f"a level with one case, the energies of up to {sub_blocks} sub-blocks of its block "
+            "are resampled. Every replicate is made per unit and fitted again. *seeds* / "
+            "*blocks* / *none* in the last column say which; *none* (a block too short to cut) "
+            "leaves the group without intervals. The level with the largest energy is the "
+            "per-unit reference: its value is 1 by construction, and so, nearly always, is its "
+            "interval.",
             "",
         ]
     else:
