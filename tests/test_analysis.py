@@ -201,6 +201,23 @@ def test_bad_input_names_the_parameter_and_the_cases() -> None:
         analyze_campaign([only_balls])
 
 
+
+def test_cases_of_other_scales_or_sampling_are_not_taken_for_repeats() -> None:
+    """The group key (particles x speed) does not see the scale or the sampling; "small" and
+    "tiny" share the drum but not the materials (stiffness), and instant and mean sampling
+    differ in energy by up to an order of magnitude (DESIGN.md section 2)."""
+    tiny = case_results(levels=(1, 2))
+    scene = ms.presets.pilot_mill(0.71, "ceramic", 2, scale="small")
+    record = synthetic_record(2, content=content_for(scene))
+    small = CaseResult.from_record(Case(scene, RunSettings(seed=1)), record, SETTINGS)
+    with pytest.raises(ValueError, match="group LDMS: cases .* differ in materials"):
+        analyze_campaign([*tiny, small])
+    mean = CaseResult.from_record(Case(tiny[1].scene, RunSettings(seed=1, sampling="mean")),
+                                  record, SETTINGS)
+    with pytest.raises(ValueError, match=r"differ in sampling \(sample_dt, sampling\) "
+                                         r"\(\(0.01, 'instant'\) and \(0.01, 'mean'\)\)"):
+        analyze_campaign([*tiny, mean])
+
 def test_analysis_settings_validate_and_round_trip() -> None:
     s = AnalysisSettings((4, 14), 0.3, "hann")
     assert s.block == (4.0, 14.0) and s.block_s == 10.0

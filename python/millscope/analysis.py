@@ -397,8 +397,9 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
     ------
     ValueError
         for a bad argument; when no case is done, a finished case was not analysed, no case
-        has a load level, or the cases of a group were analysed or built differently (block
-        length, bandwidth, window, lifters, rotation); the message names the cases.
+        has a load level, or the cases of a group were analysed, built or sampled differently
+        (block, bandwidth, window, lifters, rotation, drum, materials, sample_dt, sampling);
+        the message names the cases.
     """
     bootstrap = _integer_at_least("bootstrap", bootstrap, 0)
     seed = _integer_at_least("seed", seed, 0)
@@ -493,6 +494,12 @@ def _analyze_group(name: str, particles: str, speed_fraction: float | None,
     lifters = _same(name, "lifters", members, lambda r: (
         0 if r.scene.drum.lifters is None else r.scene.drum.lifters.count))
     rotation_hz = _same(name, "rotation frequency (Hz)", members, lambda r: r.scene.rotation_hz)
+    # the group key (particles x speed) does not see the scale or the sampling: cases that
+    # differ there are not repeats of one another and must not be averaged
+    _same(name, "drum", members, lambda r: r.scene.drum)
+    _same(name, "materials", members, lambda r: r.scene.materials)
+    _same(name, "sampling (sample_dt, sampling)", members,
+          lambda r: (r.case.settings.sample_dt, r.case.settings.sampling))
     levels = sorted({lv for lv, _ in members})
     by_level = [[r for lv, r in members if lv == level] for level in levels]
 
