@@ -17,7 +17,7 @@ import math
 import zlib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # campaign builds on this module; the type is for annotations
 __all__ = ["AnalysisSettings", "BlockAnalysis", "GroupAnalysis", "analyze_block",
            "analyze_campaign", "sub_block_energies", "table6_markdown"]
 
-WINDOWS = ("hann", "hann_periodic", "rectangular")
+WINDOWS: tuple[str, ...] = get_args(WindowName)  # the windows spectral knows
 MIN_SUB_BLOCK_SAMPLES = 32  # a sub-block of fewer samples loses most of its band to the removal
 MIN_SUB_BLOCKS = 3  # fewer sub-blocks give no usable spread
 IntervalSource = Literal["seeds", "blocks", "none"]
@@ -320,11 +320,6 @@ class GroupAnalysis:
     bootstrap: int
     settings: AnalysisSettings
     results: tuple[CaseResult, ...] = field(repr=False)
-
-    @property
-    def label(self) -> str:
-        """Same as ``name``."""
-        return self.name
 
     @property
     def has_intervals(self) -> bool:
