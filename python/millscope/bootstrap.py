@@ -12,8 +12,10 @@ sqrt(n/(n - 1)); and it is done on the log scale, so that energies stay positive
 * :func:`log_residuals` and :func:`pooled_mean_factors` serve means of very few values (2 or 3
   repeats per level): the relative deviations of several such means are pooled, on the
   assumption that they share their relative spread, and each mean draws its resample from the
-  pool. With 2 repeats at each of 7 levels, resampling each level's own 2 values covers a 95 %
-  interval about 80 % of the time; drawing from the pool of 14, about as often as it says.
+  pool. With 2 repeats at each of 7 levels, the 95 % intervals of a and b held the truth about
+  80 % of the time when each level resampled its own 2 values, and about 91 % when drawing
+  from the pool of 14 (tests/test_analysis.py): the pool's spread is still estimated from 7
+  degrees of freedom, which a percentile interval does not allow for.
 """
 
 from __future__ import annotations
@@ -24,6 +26,23 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["log_residuals", "mean_factors", "percentile_interval", "pooled_mean_factors"]
+
+
+def _positive_values(values: ArrayLike) -> NDArray[np.float64]:
+    """``values`` as a 1-D float array of at least 2 finite, positive entries, or ValueError."""
+    v = np.asarray(values, dtype=np.float64)
+    if v.ndim != 1 or v.size < 2:
+        raise ValueError(f"values must be 1-D with at least 2 entries; got shape {v.shape}")
+    if not np.all(np.isfinite(v) & (v > 0)):
+        raise ValueError(f"values must be finite and > 0; got {v.tolist()}")
+    return v
+
+
+def _replicates(replicates: int) -> int:
+    """``replicates`` as an int >= 1, or ValueError."""
+    if int(replicates) != replicates or replicates < 1:
+        raise ValueError(f"replicates = {replicates!r} is not valid; it must be an integer >= 1")
+    return int(replicates)
 
 
 def mean_factors(values: ArrayLike, replicates: int, rng: np.random.Generator
@@ -50,15 +69,10 @@ def mean_factors(values: ArrayLike, replicates: int, rng: np.random.Generator
     ValueError
         for fewer than 2 values, a value that is not finite and > 0, or replicates < 1.
     """
-    v = np.asarray(values, dtype=np.float64)
-    if v.ndim != 1 or v.size < 2:
-        raise ValueError(f"values must be 1-D with at least 2 entries; got shape {v.shape}")
-    if not np.all(np.isfinite(v) & (v > 0)):
-        raise ValueError(f"values must be finite and > 0; got {v.tolist()}")
-    if int(replicates) != replicates or replicates < 1:
-        raise ValueError(f"replicates = {replicates!r} is not valid; it must be an integer >= 1")
+    v = _positive_values(values)
+    count = _replicates(replicates)
     n = v.size
-    means = v[rng.integers(0, n, size=(int(replicates), n))].mean(axis=1)
+    means = v[rng.integers(0, n, size=(count, n))].mean(axis=1)
     return np.asarray((means / v.mean()) ** math.sqrt(n / (n - 1)), dtype=np.float64)
 
 
@@ -71,11 +85,7 @@ def log_residuals(values: ArrayLike) -> NDArray[np.float64]:
     ValueError
         for fewer than 2 values, or a value that is not finite and > 0.
     """
-    v = np.asarray(values, dtype=np.float64)
-    if v.ndim != 1 or v.size < 2:
-        raise ValueError(f"values must be 1-D with at least 2 entries; got shape {v.shape}")
-    if not np.all(np.isfinite(v) & (v > 0)):
-        raise ValueError(f"values must be finite and > 0; got {v.tolist()}")
+    v = _positive_values(values)
     logs = np.log(v)
     return np.asarray((logs - logs.mean()) * math.sqrt(v.size / (v.size - 1)), dtype=np.float64)
 
@@ -95,10 +105,9 @@ def pooled_mean_factors(pool: ArrayLike, n: int, replicates: int, rng: np.random
         raise ValueError(f"pool must be 1-D with at least 2 finite deviations; got {d.tolist()}")
     if int(n) != n or n < 1:
         raise ValueError(f"n = {n!r} is not valid; it must be an integer >= 1")
-    if int(replicates) != replicates or replicates < 1:
-        raise ValueError(f"replicates = {replicates!r} is not valid; it must be an integer >= 1")
-    return np.asarray(np.exp(d[rng.integers(0, d.size, size=(int(replicates), int(n)))]
-                             .mean(axis=1)), dtype=np.float64)
+    count = _replicates(replicates)
+    return np.asarray(np.exp(d[rng.integers(0, d.size, size=(count, int(n)))].mean(axis=1)),
+                      dtype=np.float64)
 
 
 def percentile_interval(samples: ArrayLike, confidence: float, axis: int = 0
