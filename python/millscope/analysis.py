@@ -271,8 +271,8 @@ class GroupAnalysis:
         Spectral energy of the block with the mean and the LTH removed, (N m)^2 s (eq. 11).
     energy_relative_std : ndarray
         How much one case's energy scatters, standard deviation over mean: between repeats
-        (``"seeds"``), or from the sub-blocks of the one record (``"blocks"``); nan for
-        ``"none"``.
+        (``"seeds"``), or for the one record (``"blocks"``) the larger of its sub-blocks'
+        scatter and its spectrum's sampling spread; nan for ``"none"``.
     energy_pu : ndarray
         ``energy`` per unit of the group's largest (the lowest filling; Fig. 14).
     energy_pu_interval : ndarray, shape (2, n_levels)
@@ -361,7 +361,10 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
       resampling 2 or 3 values per level alone gives intervals far too narrow;
     * at a level with one case (``"blocks"``), the spread within the run: the energies of
       ``sub_blocks`` consecutive sub-blocks of its block (:func:`sub_block_energies`) are
-      resampled and scale the block's energy (:func:`~millscope.bootstrap.mean_factors`).
+      resampled and scale the block's energy (:func:`~millscope.bootstrap.mean_factors`),
+      their log deviations widened to the block spectrum's sampling spread
+      (``SpectralEnergy.relative_std``) where that is larger: sub-blocks do not see the
+      slow fluctuations that make whole blocks scatter.
 
     Deviations are scaled by sqrt(n/(n-1)) and taken on the log scale. Every replicate is made
     per unit and fitted again, which gives percentile intervals for each per-unit energy and
@@ -448,7 +451,13 @@ def _same(name: str, what: str, members: Sequence[tuple[float, CaseResult]],
 def _level_spread(repeats: list[CaseResult], settings: AnalysisSettings, sub_blocks: int
                   ) -> tuple[IntervalSource, NDArray[np.float64] | None, float]:
     """(source, the values to resample, relative std of one case's energy) for one level:
-    the repeats' energies, or the sub-block energies of its one case."""
+    the repeats' energies, or the sub-block energies of its one case.
+
+    For one case the spread is the larger of the sub-blocks' and the block spectrum's
+    (:attr:`~millscope.SpectralEnergy.relative_std`): sub-blocks lose the content below their
+    own, coarser, removal bands (+-2 Hz around the mean and the LTH for 1 s Hann sub-blocks),
+    so a torque with slow fluctuations scatters from block to block more than they show.
+    """
     energies = np.array([r.energy for r in repeats])
     if len(repeats) >= 2:
         return "seeds", energies, float(np.std(energies, ddof=1) / np.mean(energies))
@@ -459,25 +468,35 @@ def _level_spread(repeats: list[CaseResult], settings: AnalysisSettings, sub_blo
                                window=settings.window)  # type: ignore[arg-type]
     if parts is None or not np.all(parts > 0):
         return "none", None, math.nan
-    spread = float(np.std(parts, ddof=1) / np.mean(parts) / math.sqrt(parts.size))
+    spread = _sub_block_spread(parts)
+    if math.isfinite(case.energy_relative_std):
+        spread = max(spread, case.energy_relative_std)
     return "blocks", parts, spread
+
+
+def _sub_block_spread(parts: NDArray[np.float64]) -> float:
+    """Relative std of the mean of the sub-block energies (that of the whole block's)."""
+    return float(np.std(parts, ddof=1) / np.mean(parts) / math.sqrt(parts.size))
 
 
 def _replicate_factors(spreads: list[tuple[IntervalSource, NDArray[np.float64] | None, float]],
                        replicates: int, rng: np.random.Generator) -> NDArray[np.float64]:
     """Bootstrap factors on each level's energy, shape (replicates, levels): levels with
     repeats draw from the pooled relative deviations of all such levels, a level with one case
-    resamples its sub-blocks."""
+    resamples its sub-blocks, its deviations scaled up to the level's spread when the block's
+    spectrum says it scatters more (:func:`_level_spread`)."""
     seeds = [values for source, values, _ in spreads if source == "seeds"]
     pool = np.concatenate([log_residuals(v) for v in seeds]) if seeds else None
     columns = []
-    for source, values, _ in spreads:
+    for source, values, spread in spreads:
         assert values is not None
         if source == "seeds":
             assert pool is not None
             columns.append(pooled_mean_factors(pool, values.size, replicates, rng))
         else:
-            columns.append(mean_factors(values, replicates, rng))
+            own = _sub_block_spread(values)
+            widen = spread / own if own > 0 else 1.0
+            columns.append(mean_factors(values, replicates, rng) ** widen)
     return np.column_stack(columns)
 
 
