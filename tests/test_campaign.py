@@ -380,3 +380,44 @@ def test_bad_run_arguments_are_refused_before_any_work(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="store = .* a directory"):
         ms.Campaign([tiny()], tmp_path / "file")
     assert not store.exists()
+
+
+# -- (f) reading a store back, as analysed -------------------------------------------------------
+
+
+def test_a_store_is_read_back_as_its_campaign_analysed_it(tmp_path: Path) -> None:
+    """Cases answered with synthetic records (tests/synthetic_campaign.py) instead of DEM runs:
+    the store code is the real one."""
+    from millscope.analysis import AnalysisSettings
+
+    from .synthetic_campaign import synthetic_store
+
+    store = tmp_path / "store"
+    scenes = ms.presets.paper_cases("ceramic", 0.71, [1, 2], scale="tiny")
+    results = synthetic_store(store, scenes, seeds=(0, 1), fail=["LDMS#2"], block=(3.0, 13.0))
+    assert [r.status for r in results] == ["done", "done", "failed", "failed"]
+    settings = AnalysisSettings((3.0, 13.0), 0.3, "hann")
+    assert read_manifest(store)["analysis"] == settings.to_dict()
+    camp = ms.Campaign.from_store(store)
+    assert camp.analysis == settings
+    again = camp.results()
+    assert [r.hash for r in again] == [r.hash for r in results]
+    for a, b in zip(results, again, strict=True):
+        assert (b.status, b.analysis) == (a.status, a.analysis)
+        if a.status == "done":
+            assert (b.energy, b.lth_amplitude) == (a.energy, a.lth_amplitude)
+    assert ms.Campaign.from_store(store, block=(1.0, 11.0)).analysis.block == (1.0, 11.0)
+    # a store written before the manifest recorded the analysis gets the Campaign defaults
+    manifest = json.loads((store / "manifest.json").read_text())
+    del manifest["analysis"]
+    (store / "manifest.json").write_text(json.dumps(manifest))
+    assert ms.Campaign.from_store(store).analysis == AnalysisSettings((4.0, 14.0), 0.3, "hann")
+    (store / "manifest.json").unlink()  # no manifest at all: the case files alone
+    assert len(ms.Campaign.from_store(store).cases) == 4
+
+
+def test_from_store_refuses_what_is_not_a_store(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="store = .* an existing campaign store directory"):
+        ms.Campaign.from_store(tmp_path / "none")
+    with pytest.raises(ValueError, match="holds no case file"):
+        ms.Campaign.from_store(tmp_path)

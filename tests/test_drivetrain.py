@@ -17,8 +17,17 @@ import numpy as np
 import pytest
 import scipy.signal as ss
 
+import millscope as ms
 from millscope import drivetrain
-from millscope.drivetrain import DriveTrain, GearStage, InterferenceLine, Motor, decimate
+from millscope.drivetrain import (
+    DECIMATE_FACTOR,
+    DriveTrain,
+    GearStage,
+    InterferenceLine,
+    Motor,
+    decimate,
+    decimate_record,
+)
 
 TOTAL_RATIO = 36.27
 PINION_TEETH, PINION_HZ = 18, 3.55
@@ -348,3 +357,17 @@ def test_decimation_leaves_mean_and_drift_without_edge_transients() -> None:
 def test_decimation_refuses_bad_input(time_s, torque, target_hz: float, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         decimate(time_s, torque, target_hz)
+
+
+def test_decimate_record_brings_a_fast_record_to_the_band() -> None:
+    """1 kHz to 2.5 x 50 Hz; a record already at or below that rate is returned as it is."""
+    t = np.arange(4000) / 1000.0
+    fast = ms.TorqueRecord(t, 100.0 + np.sin(2 * np.pi * 9.0 * t), {"lifters": 16})
+    slow = decimate_record(fast, 50.0)
+    assert slow.sample_rate_hz == pytest.approx(DECIMATE_FACTOR * 50.0)
+    assert slow.meta == {"lifters": 16, "decimated_to_hz": 125.0}
+    _, xs = decimate(fast.time_s, fast.torque_Nm, 125.0)
+    np.testing.assert_array_equal(slow.torque_Nm, xs)
+    assert decimate_record(slow, 50.0) is slow
+    with pytest.raises(ValueError, match="band_hz = 0 is not valid"):
+        decimate_record(fast, 0)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import warnings
 
 import numpy as np
@@ -10,7 +11,7 @@ import pytest
 from scipy import stats
 
 import millscope as ms
-from millscope.fit import OutsideCalibrationWarning, per_unit
+from millscope.fit import OutsideCalibrationWarning, log_fit_coefficients, per_unit
 from millscope.synthetic import SyntheticTorque, synthetic_record
 
 
@@ -57,6 +58,22 @@ def test_per_unit_divides_by_the_largest() -> None:
     np.testing.assert_allclose(per_unit([4.0, 2.0, 1.0]), [1.0, 0.5, 0.25])
     with pytest.raises(ValueError, match="positive maximum"):
         per_unit([0.0, 0.0])
+    np.testing.assert_allclose(per_unit([[4.0, 2.0], [1.0, 3.0]]), [[1.0, 0.5], [1 / 3, 1.0]])
+    with pytest.raises(ValueError, match="positive maximum"):
+        per_unit([[1.0, 2.0], [0.0, 0.0]])
+
+
+def test_log_fit_coefficients_fit_every_row_as_scipy_does(rng) -> None:
+    x = np.arange(1, 8)
+    rows = -0.45 * np.log(x) + 1.0 + rng.normal(0, 0.05, (5, x.size))
+    a, b = log_fit_coefficients(x, rows)
+    assert a.shape == b.shape == (5,)
+    for k, row in enumerate(rows):
+        ref = stats.linregress(np.log(x), row)
+        assert a[k] == pytest.approx(ref.slope, rel=1e-10)
+        assert b[k] == pytest.approx(ref.intercept, rel=1e-10)
+    with pytest.raises(ValueError, match=r"shape \(7,\) or \(m, 7\)"):
+        log_fit_coefficients(x, rows[:, :6])
 
 
 @pytest.fixture(scope="module")
@@ -119,3 +136,111 @@ def test_calibration_round_trip_and_damaged_files(tmp_path, calibration) -> None
         ms.Calibration.load(bad)
     with pytest.raises(ValueError, match="reference_energy = 0"):
         ms.Calibration(fit=calibration.fit, reference_energy=0.0, lifters=16, rotation_hz=0.5)
+
+
+
+def test_a_two_point_calibration_is_standard_json(tmp_path) -> None:
+    """A fit through 2 levels has no standard errors: written as null (JSON has no NaN),
+    read back as nan."""
+    fit = ms.log_fit([1.0, 3.0], [1.0, 0.5])
+    assert math.isnan(fit.a_stderr)
+    cal = ms.Calibration(fit=fit, reference_energy=2.0, lifters=16, rotation_hz=0.5)
+    path = cal.save(tmp_path / "cal.json")
+
+    def refuse(name: str) -> None:
+        raise AssertionError(f"{name} is not standard JSON")
+
+    data = json.loads(path.read_text(), parse_constant=refuse)
+    assert data["fit"]["a_stderr"] is None and data["fit"]["a"] == fit.a
+    loaded = ms.Calibration.load(path)
+    assert math.isnan(loaded.fit.a_stderr) and math.isnan(loaded.fit.residual_std)
+    assert (loaded.fit.a, loaded.fit.b, loaded.fit.n) == (fit.a, fit.b, 2)
+    data["fit"] = [1, 2]
+    (tmp_path / "bad.json").write_text(json.dumps(data))
+    with pytest.raises(ValueError, match="incomplete or damaged"):
+        ms.Calibration.load(tmp_path / "bad.json")
+
+# -- calibration from a campaign's results ---------------------------------------------------------
+@pytest.fixture(scope="module")
+def campaign_results():
+    from .synthetic_campaign import case_results
+
+    return case_results(family=11)
+
+
+def test_calibration_from_results_takes_the_groups_fit_and_settings(campaign_results,
+                                                                    tmp_path) -> None:
+    from millscope.analysis import analyze_campaign
+
+    cal = ms.Calibration.from_results(campaign_results)
+    (group,) = analyze_campaign(campaign_results)
+    assert cal.fit == group.fit
+    assert cal.reference_energy == max(r.energy for r in campaign_results)
+    assert cal.label == "LDMS" and cal.lifters == 16
+    assert cal.rotation_hz == campaign_results[0].scene.rotation_hz
+    assert (cal.block_s, cal.bandwidth, cal.window) == (10.0, 0.3, "hann")
+    assert cal.band_hz == pytest.approx(50.0)  # the Nyquist frequency of 10 ms samples
+    assert cal.block_relative_std == pytest.approx(group.block_relative_std())
+    assert cal.meta["a_interval"] == list(group.a_interval)
+    assert cal.meta["cases"] == [r.hash for r in group.results]
+    assert ms.Calibration.load(cal.save(tmp_path / "cal.json")) == cal
+
+
+def test_calibration_from_results_chooses_among_groups(campaign_results) -> None:
+    from .synthetic_campaign import case_results
+
+    both = campaign_results + case_results(levels=(1, 3), particles="steel", speed=0.80)
+    with pytest.raises(ValueError, match=r"2 groups \(LDMS, HDHS\); choose one with group="):
+        ms.Calibration.from_results(both)
+    with pytest.raises(ValueError, match="group = 'LDLS' is not among .*: LDMS, HDHS"):
+        ms.Calibration.from_results(both, group="LDLS")
+    assert ms.Calibration.from_results(both, group="HDHS").label == "HDHS"
+    single = case_results(levels=(2,))
+    with pytest.raises(ValueError, match="single load level"):
+        ms.Calibration.from_results(single)
+
+
+@pytest.mark.parametrize("level", [1.5, 2.5, 4.0, 6.0])
+def test_estimate_from_a_campaign_calibration_holds_the_true_level(campaign_results,
+                                                                   level: float) -> None:
+    """Records the calibration has not seen, at levels between its own: over 80 such records
+    (20 calibrations x 4 levels) the 95 % interval held the level 79 times."""
+    from .synthetic_campaign import LAW, content_for
+
+    cal = ms.Calibration.from_results(campaign_results)
+    scene = campaign_results[0].scene
+    for seed in (31, 32, 33):
+        rec = synthetic_record(level, content=content_for(scene, LAW), seed=seed).block(4, 14)
+        est = ms.estimate_fill(rec, cal)
+        assert est.interval[0] <= level <= est.interval[1]
+        assert not est.outside
+
+
+def test_estimate_counts_the_calibrated_band_and_removes_further_lines(campaign_results) -> None:
+    """A record sampled at 1 kHz whose noise has the same density in 0-50 Hz as a level-3
+    record at 100 Hz (ten times the variance) reads level 3: only the calibrated band counts.
+    A 40 N m line at 23.1 Hz is removed when named."""
+    from .synthetic_campaign import LAW, content_for
+
+    cal = ms.Calibration.from_results(campaign_results)
+    scene = campaign_results[0].scene
+    fast = content_for(scene, LAW, noise_std_Nm=30.0 * np.sqrt(10.0), lines=((23.1, 40.0),))
+    rec = synthetic_record(3, content=fast, sample_rate_hz=1000.0, seed=8).block(4, 14)
+    est = ms.estimate_fill(rec, cal, lines_hz=[23.1])
+    assert est.interval[0] <= 3.0 <= est.interval[1]
+    with pytest.warns(OutsideCalibrationWarning):
+        assert ms.estimate_fill(rec, cal).level < 1.0  # the line's energy swamps the noise
+    slow = synthetic_record(3, content=content_for(scene, LAW), sample_rate_hz=80.0)
+    with pytest.raises(ValueError, match="band_hz = 50 Hz .* needs at least 100 Hz"):
+        ms.estimate_fill(slow.block(4, 14), cal)
+
+
+def test_format_1_calibrations_still_load(tmp_path, calibration) -> None:
+    data = json.loads(calibration.save(tmp_path / "new.json").read_text())
+    assert data["format"] == "millscope-calibration-2"
+    old = {k: v for k, v in data.items() if k not in ("band_hz", "block_relative_std")}
+    old["format"] = "millscope-calibration-1"
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    loaded = ms.Calibration.load(tmp_path / "old.json")
+    assert loaded == calibration
+    assert loaded.band_hz is None and loaded.block_relative_std is None

@@ -194,6 +194,64 @@ def test_energy_fits_put_each_group_in_one_legend_entry() -> None:
         plots.plot_energy_fits({**groups, "bad": (LEVELS, ENERGY[:5], None)})
 
 
+# -- quantities against filling level (Figs. 9, 11, 14) and the spectra grid (Fig. 10) ------
+def test_level_plots_draw_each_group_in_level_order() -> None:
+    levels = np.array([3.0, 1.0, 2.0])
+    torque = np.array([0.98, 0.95, 1.0])
+    for make, word in ((plots.plot_torque_levels, "torque"), (plots.plot_lth_levels, "LTH")):
+        (ax,) = make({"HDMS": (levels, torque), "LDMS": (levels, 0.9 * torque)}).axes
+        assert word in ax.get_ylabel() and "load level" in ax.get_xlabel()
+        assert [c.get_label() for c in ax.containers] == ["HDMS", "LDMS"]
+        x, y = ax.containers[0].lines[0].get_data()
+        np.testing.assert_array_equal(x, [1.0, 2.0, 3.0])
+        np.testing.assert_array_equal(y, [0.95, 1.0, 0.98])
+        assert not ax.containers[0].has_yerr
+    with pytest.raises(ValueError, match="groups is empty"):
+        plots.plot_torque_levels({})
+    with pytest.raises(ValueError, match=r"groups\['x'\]: levels has 3 values but"):
+        plots.plot_lth_levels({"x": (levels, torque[:2])})
+    with pytest.raises(ValueError, match="does not draw"):
+        plots.plot_torque_levels({"x": (levels, torque, np.zeros((2, 3)))})
+
+
+def test_energy_level_plot_draws_intervals_clipped_at_the_point() -> None:
+    y = ENERGY
+    bounds = np.vstack([y - 0.05, y + 0.02])
+    bounds[1, 0] = y[0] - 0.01  # a percentile interval that misses its estimate from above
+    (ax,) = plots.plot_energy_levels({"LDMS": (LEVELS, y, bounds),
+                                      "HDMS": (LEVELS, y, np.full((2, 7), np.nan))}).axes
+    first, second = ax.containers
+    assert first.has_yerr and not second.has_yerr
+    (bars,) = first.lines[2]
+    segments = np.asarray(bars.get_segments())
+    np.testing.assert_allclose(segments[:, 0, 1], y - 0.05)
+    np.testing.assert_allclose(segments[1:, 1, 1], y[1:] + 0.02)
+    assert segments[0, 1, 1] == pytest.approx(y[0])  # clipped: no bar above the point
+    with pytest.raises(ValueError, match=r"bounds has shape \(7,\)"):
+        plots.plot_energy_levels({"LDMS": (LEVELS, y, y)})
+
+
+def test_spectra_grid_has_a_lettered_panel_per_spectrum_with_its_lth(spec) -> None:
+    fig = plots.plot_spectra_grid([spec, spec, spec], ["HDMS1", "HDMS2", "HDMS3"],
+                                  lth_hz=[F_LTH, None, F_LTH], ncols=2)
+    assert len(fig.axes) == 3  # the fourth cell of the 2 x 2 grid is removed
+    assert [ax.get_title() for ax in fig.axes] == ["a) HDMS1", "b) HDMS2", "c) HDMS3"]
+    arrows = [[t for t in ax.texts if t.get_text().startswith("LTH")] for ax in fig.axes]
+    assert [len(a) for a in arrows] == [1, 0, 1]
+    np.testing.assert_array_equal(fig.axes[1].lines[0].get_ydata(),
+                                  fig.axes[0].lines[0].get_ydata())
+    half = ms.spectrum(sine_record(1000, 100.0, mean=MEAN, amplitude=AMP / 2, freq_hz=F_LTH,
+                                   noise_std=0.5))
+    same = plots.plot_spectra_grid([spec, half], ["full", "half"])
+    assert same.axes[0].get_ylim() == same.axes[1].get_ylim()  # the noise falls visibly
+    own = plots.plot_spectra_grid([spec, half], ["full", "half"], same_scale=False)
+    assert own.axes[1].get_ylim()[1] < own.axes[0].get_ylim()[1]
+    with pytest.raises(ValueError, match="one label and one LTH"):
+        plots.plot_spectra_grid([spec], ["a", "b"])
+    with pytest.raises(ValueError, match="ncols = 0"):
+        plots.plot_spectra_grid([spec], ["a"], ncols=0)
+
+
 # -- time domain -----------------------------------------------------------------------------
 def test_torque_plot_draws_torque_and_dashed_mean(record) -> None:
     (ax,) = plots.plot_torque(record).axes

@@ -10,7 +10,14 @@ from typing import Any
 import numpy as np
 import pytest
 
-from millscope.presets import SCALES, axial_slice, case_name, paper_cases, pilot_mill
+from millscope.presets import (
+    SCALES,
+    axial_slice,
+    case_key,
+    case_name,
+    paper_cases,
+    pilot_mill,
+)
 from millscope.scene import Scene
 
 TABLE5_COUNTS = [4062, 8124, 12186, 16248, 20310, 24372, 28434]  # Table 5, as printed
@@ -154,6 +161,33 @@ def test_case_name_refuses_bad_arguments(args: tuple[Any, Any, Any], pattern: st
 
 
 # -- reduced scales --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("scale", ["paper", "tiny"])
+def test_case_key_reads_particles_speed_and_level_back(scale: str) -> None:
+    for scene in paper_cases(["ceramic", "steel", None], [0.62, 0.80], [2, 7], scale):
+        key = case_key(scene)
+        assert key.speed_fraction == scene.speed_fraction
+        assert key.rotation_hz == scene.rotation_hz
+        assert key.group == scene.name.split("#")[0]
+        if key.particles is None:
+            assert key.load_level is None and key.group.startswith("balls-")
+        else:
+            assert key.load_level == float(scene.name[-1])
+            assert scene.name.startswith({"ceramic": "LD", "steel": "HD"}[key.particles])
+
+
+def test_case_key_of_a_renamed_scene_counts_particles_per_ball() -> None:
+    """Without the case code in its name, the level is the particle count per ball in units
+    of the paper's 4062 / 2466: exact at paper scale, within the rounding of the slice's
+    counts (645 particles, 391 balls at level 1) at the reduced scales."""
+    paper = pilot_mill(0.71, "ceramic", 3).replace(name="mine")
+    assert case_key(paper).load_level == pytest.approx(3.0, rel=1e-12)
+    tiny = pilot_mill(0.71, "steel", 1, scale="tiny").replace(name="mine", speed_fraction=None,
+                                                               speed_hz=0.5)
+    key = case_key(tiny)
+    assert key.load_level == pytest.approx(645 / 391 * 2466 / 4062, rel=1e-12)
+    assert key.particles == "steel" and key.group == "HD-0.5Hz" and key.speed_fraction is None
 
 
 def test_scales_are_documented() -> None:

@@ -8,8 +8,10 @@ from typing import Any as _Any
 
 from . import campaign, contact, drivetrain, presets
 from ._core import build_info as _build_info
+from .analysis import GroupAnalysis, analyze_campaign
 from .campaign import Campaign, Case, CaseResult, RunSettings
 from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
+from .monitoring import WindowEstimate, monitor
 from .record import RecordError, TorqueRecord
 from .scene import Drum, Fraction, Lifters, Material, Pair, Scene
 from .simulation import CheckpointError, SettleWarning, Simulation
@@ -27,7 +29,7 @@ from .spectral import (
 
 __version__: str = _build_info()["version"]
 
-_LAZY_SUBMODULES = ("plots",)  # matplotlib is imported only when figures are asked for
+_LAZY_SUBMODULES = ("plots", "report")  # matplotlib is imported only when figures are asked for
 
 
 def __getattr__(name: str) -> _Any:
@@ -50,6 +52,7 @@ __all__ = [
     "SettleWarning",
     "Simulation",
     "FillEstimate",
+    "GroupAnalysis",
     "LogFit",
     "Peak",
     "RecordError",
@@ -57,7 +60,9 @@ __all__ = [
     "SpectralEnergy",
     "Spectrum",
     "TorqueRecord",
+    "WindowEstimate",
     "__version__",
+    "analyze_campaign",
     "band_stop",
     "campaign",
     "contact",
@@ -66,8 +71,10 @@ __all__ = [
     "find_peak",
     "lifter_harmonic_hz",
     "log_fit",
+    "monitor",
     "plots",
     "presets",
+    "report",
     "spectral_energy",
     "spectrum",
     "window_factors",

@@ -58,7 +58,7 @@ import numpy as np
 
 from . import _core
 from ._files import atomic_write, read_json
-from .analysis import analyze_block
+from .analysis import AnalysisSettings, analyze_block
 from .contact import DEFAULT_DT_FRACTION, MAX_DT_FRACTION
 from .presets import paper_cases
 from .record import RecordError, TorqueRecord
@@ -358,6 +358,9 @@ class CaseResult:
         Spectral energy of the block with the mean and the LTH removed, (N m)^2 s, eq. (11).
     energy_relative_std : float
         Its sampling spread (standard deviation / mean, dimensionless).
+    analysis : AnalysisSettings or None
+        How the values above were obtained (block, bandwidth, window); None when the case was
+        not analysed.
     """
 
     case: Case
@@ -372,6 +375,36 @@ class CaseResult:
     lth_amplitude: float = math.nan
     energy: float = math.nan
     energy_relative_std: float = math.nan
+    analysis: AnalysisSettings | None = None
+
+    @classmethod
+    def from_record(cls, case: Case, record: TorqueRecord,
+                    analysis: AnalysisSettings | None = None, *,
+                    wall_time_s: float = math.nan) -> CaseResult:
+        """A finished case from its record, analysed over ``analysis.block`` (None: not
+        analysed).
+
+        The block's mean torque, the LTH located near lifters x rotation frequency of the
+        case's scene (:func:`~millscope.analysis.analyze_block`; without lifters only the mean
+        is removed) and the spectral energy with the mean and the LTH removed.
+        """
+        if analysis is None:
+            return cls(case, case.hash(), "done", record, wall_time_s=wall_time_s)
+        blk = record.block(*analysis.block)
+        lifters = case.scene.drum.lifters
+        window: Any = analysis.window
+        if lifters is not None:
+            a = analyze_block(blk, lifters=lifters.count, rotation_hz=case.scene.rotation_hz,
+                              bandwidth=analysis.bandwidth, window=window)
+            values = {"mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
+                      "lth_amplitude": a.lth.amplitude, "energy": a.energy.energy,
+                      "energy_relative_std": a.energy.relative_std}
+        else:
+            e = spectral_energy(blk, ["mean"], bandwidth=analysis.bandwidth, window=window)
+            values = {"mean_torque": blk.mean_torque_Nm, "energy": e.energy,
+                      "energy_relative_std": e.relative_std}
+        return cls(case, case.hash(), "done", record, wall_time_s=wall_time_s,
+                   analysis=analysis, **values)
 
     @property
     def scene(self) -> Scene:
@@ -421,22 +454,28 @@ def _read_failed(path: Path) -> dict[str, Any] | None:
     return info if isinstance(info, dict) else None
 
 
-def _scan(store: Path) -> dict[str, dict[str, Any]]:
-    """Manifest entries of every case file in ``store``: a finished case's file wins over a
-    failure of the same case."""
-    entries: dict[str, dict[str, Any]] = {}
+def _stored(store: Path) -> dict[str, tuple[Status, Path, dict[str, Any]]]:
+    """Every whole case file in ``store`` by hash: (status, path, its case info); a finished
+    case's file wins over a failure of the same case."""
+    found: dict[str, tuple[Status, Path, dict[str, Any]]] = {}
     folder = store / "cases"
     if not folder.is_dir():
-        return entries
+        return found
     for path in sorted(folder.glob("*.failed.json")):
         info = _read_failed(path)
         if info is not None:
-            entries[path.name.split(".")[0]] = _entry(info, "failed", path, store)
+            found[path.name.split(".")[0]] = ("failed", path, info)
     for path in sorted(folder.glob("*.npz")):
         info = _read_done(path)
         if info is not None:
-            entries[path.stem] = _entry(info, "done", path, store)
-    return entries
+            found[path.stem] = ("done", path, info)
+    return found
+
+
+def _scan(store: Path) -> dict[str, dict[str, Any]]:
+    """Manifest entries of every case file in ``store``."""
+    return {digest: _entry(info, status, path, store)
+            for digest, (status, path, info) in _stored(store).items()}
 
 
 def _entry(info: Mapping[str, Any], status: Status, path: Path | None,
@@ -466,7 +505,8 @@ def read_manifest(store: str | os.PathLike[str]) -> dict[str, Any]:
     return data
 
 
-def _write_manifest(store: Path, entries: Mapping[str, Mapping[str, Any]]) -> None:
+def _write_manifest(store: Path, entries: Mapping[str, Mapping[str, Any]],
+                    analysis: AnalysisSettings | None) -> None:
     counts = {s: sum(1 for e in entries.values() if e["status"] == s)
               for s in ("done", "failed", "pending")}
     data = {
@@ -474,6 +514,7 @@ def _write_manifest(store: Path, entries: Mapping[str, Mapping[str, Any]]) -> No
         "millscope_version": _core.build_info()["version"],
         "updated": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "counts": counts,
+        "analysis": None if analysis is None else analysis.to_dict(),
         "cases": list(entries.values()),
     }
     with atomic_write(store / "manifest.json", "w") as fh:
@@ -683,6 +724,60 @@ class Campaign:
         self._bandwidth = _positive("bandwidth", bandwidth, "Hz")
         self._window = _choice("window", window, ("hann", "hann_periodic", "rectangular"))
         self._block = None if block is None else self._check_block(block)
+        self._analysis = (None if self._block is None
+                          else AnalysisSettings(self._block, self._bandwidth, self._window))
+
+    @classmethod
+    def from_store(cls, store: str | os.PathLike[str], *,
+                   block: tuple[float, float] | None = None, bandwidth: float | None = None,
+                   window: str | None = None) -> Campaign:
+        """The campaign of the cases a store holds, to read their results without the scenes.
+
+        Every case with a file in the store (finished or failed) is taken, in the manifest's
+        order; cases the manifest lists as pending have no file and are left out. The results
+        are analysed as the campaign that last ran on the store analysed them (its manifest
+        says how) unless ``block``, ``bandwidth`` or ``window`` say otherwise; a store whose
+        manifest predates that record gets the defaults, block (4, 14) s, 0.3 Hz, Hann.
+
+        Parameters
+        ----------
+        store : str or path
+            A campaign store directory.
+        block, bandwidth, window
+            As :class:`Campaign`; None: as recorded in the store.
+
+        Raises
+        ------
+        ValueError
+            when ``store`` is not a directory or holds no case file, for a damaged manifest,
+            or a block that does not fit the stored cases.
+        """
+        path = Path(store)
+        if not path.is_dir():
+            raise _fail("store", str(store), "an existing campaign store directory")
+        stored = _stored(path)
+        if not stored:
+            raise ValueError(f"store {path} holds no case file (cases/<hash>.npz or "
+                             "cases/<hash>.failed.json); run a Campaign into it first")
+        order: list[str] = []
+        saved: dict[str, Any] | None = {"block": [4.0, 14.0], "bandwidth": 0.3,
+                                        "window": "hann"}
+        if (path / "manifest.json").is_file():
+            manifest = read_manifest(path)
+            order = [e.get("hash") for e in manifest.get("cases", []) if isinstance(e, dict)]
+            if "analysis" in manifest:
+                saved = manifest["analysis"]
+                if saved is not None:
+                    saved = AnalysisSettings.from_dict(saved).to_dict()
+        rank = {digest: k for k, digest in enumerate(order)}
+        digests = sorted(stored, key=lambda d: (rank.get(d, len(rank)), d))
+        cases = [Case.from_dict(stored[d][2]["case"]) for d in digests]
+        if block is None and saved is not None:
+            block = tuple(saved["block"])  # type: ignore[assignment]
+        defaults = saved or {"bandwidth": 0.3, "window": "hann"}
+        return cls(cases, path, block=block,
+                   bandwidth=defaults["bandwidth"] if bandwidth is None else bandwidth,
+                   window=defaults["window"] if window is None else window)
 
     def _check_block(self, block: object) -> tuple[float, float]:
         if (isinstance(block, (str, bytes)) or not isinstance(block, Iterable)
@@ -731,6 +826,11 @@ class Campaign:
     def block(self) -> tuple[float, float] | None:
         """The analysed block (t1, t2), s, or None."""
         return self._block
+
+    @property
+    def analysis(self) -> AnalysisSettings | None:
+        """How the results are analysed (block, bandwidth, window), or None."""
+        return self._analysis
 
     def __len__(self) -> int:
         return len(self._cases)
@@ -808,7 +908,7 @@ class Campaign:
             todo = [k for k, d in enumerate(self._hashes)
                     if entries[d]["status"] == "pending"
                     or (retry_failed and entries[d]["status"] == "failed")]
-            _write_manifest(self._store, entries)
+            _write_manifest(self._store, entries, self._analysis)
             if todo:
                 self._execute(todo, entries, executor, max_workers, cores, progress)
         return self.results()
@@ -853,7 +953,7 @@ class Campaign:
                                    "error": f"{type(exc).__name__}: {exc}",
                                    "traceback": _traceback_summary(exc), "wall_time_s": None}
                     entries[self._hashes[k]] = self._store_outcome(k, outcome)
-                    _write_manifest(self._store, entries)
+                    _write_manifest(self._store, entries, self._analysis)
                     bar.update(1)
                     if outcome["status"] == "failed":
                         bar.set_postfix(failed=sum(
@@ -867,7 +967,7 @@ class Campaign:
         finally:
             if pool is not None:
                 pool.shutdown(wait=True, cancel_futures=True)
-            _write_manifest(self._store, entries)
+            _write_manifest(self._store, entries, self._analysis)
 
     def _store_outcome(self, k: int, outcome: Mapping[str, Any]) -> dict[str, Any]:
         """Writes a worker's outcome for case ``k``; returns its manifest entry."""
@@ -915,9 +1015,9 @@ class Campaign:
                 except RecordError:
                     record = None
                 if record is not None:
-                    out.append(CaseResult(case, digest, "done", record,
-                                          wall_time_s=_number(info.get("wall_time_s")),
-                                          **self._analyse(record)))
+                    out.append(CaseResult.from_record(
+                        case, record, self._analysis,
+                        wall_time_s=_number(info.get("wall_time_s"))))
                     continue
             failure = _failure_path(self._store, digest)
             info = _read_failed(failure) if failure.is_file() else None
@@ -928,23 +1028,6 @@ class Campaign:
             else:
                 out.append(CaseResult(case, digest, "pending"))
         return out
-
-    def _analyse(self, record: TorqueRecord) -> dict[str, float]:
-        if self._block is None:
-            return {}
-        blk = record.block(*self._block)
-        meta = record.meta
-        lifters, rotation_hz = int(meta.get("lifters", 0)), float(meta["rotation_hz"])
-        if lifters > 0 and rotation_hz > 0:
-            a = analyze_block(blk, lifters=lifters, rotation_hz=rotation_hz,
-                              bandwidth=self._bandwidth, window=self._window)  # type: ignore[arg-type]
-            return {"mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
-                    "lth_amplitude": a.lth.amplitude, "energy": a.energy.energy,
-                    "energy_relative_std": a.energy.relative_std}
-        e = spectral_energy(blk, ["mean"], bandwidth=self._bandwidth,
-                            window=self._window)  # type: ignore[arg-type]
-        return {"mean_torque": blk.mean_torque_Nm, "energy": e.energy,
-                "energy_relative_std": e.relative_std}
 
 
 def _number(value: object) -> float:

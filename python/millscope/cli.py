@@ -1,7 +1,8 @@
 """Command line: ``python -m millscope`` and the ``millscope`` script.
 
-Subcommands: ``info`` (build facts), ``analyze`` (one torque file), ``demo`` (the main job),
-``bench`` (engine throughput, :mod:`millscope.bench`).
+Subcommands: ``info`` (build facts), ``analyze`` (one torque file), ``monitor`` (a filling
+estimate per window of a long record), ``report`` (a campaign store's report), ``demo`` (the
+main job), ``bench`` (engine throughput, :mod:`millscope.bench`).
 Bad input ends with one line ``millscope: error: ...`` on stderr and exit code 2.
 """
 
@@ -15,7 +16,6 @@ from pathlib import Path
 from . import __version__
 
 EXIT_BAD_INPUT = 2
-DECIMATE_FACTOR = 2.5  # records faster than this x the analysis band are decimated to it
 
 
 class CliError(Exception):
@@ -62,22 +62,20 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     """Analyse one torque file: mean, LTH, spectral energy; write plots."""
     from . import plots
     from .analysis import analyze_block
-    from .drivetrain import DriveTrain, decimate
+    from .drivetrain import DriveTrain, decimate_record
     from .record import TorqueRecord
     from .spectral import RemoveItem, band_stop, spectrum
 
-    record = TorqueRecord.load(args.file)
+    raw = TorqueRecord.load(args.file)
     lines: list[float] = []
     if args.drive is not None:
         drive = DriveTrain.load(args.drive)
         lines = drive.frequencies_hz(max_hz=args.band_hz, include_lth=False)
-    # The anti-aliasing filter rolls off over the top fifth below the new Nyquist frequency, so
-    # records are brought to 2.5x the band (not 2x) and only the band itself is counted.
-    target_hz = DECIMATE_FACTOR * args.band_hz
-    if record.sample_rate_hz > target_hz * (1 + 1e-9):
-        t, q = decimate(record.time_s, record.torque_Nm, target_hz)
-        print(f"decimated from {record.sample_rate_hz:g} Hz to {target_hz:g} Hz (anti-aliased)")
-        record = TorqueRecord(t, q, {**record.meta, "decimated_to_hz": target_hz})
+    # only the band itself is counted, from a record decimated to 2.5x the band when faster
+    record = decimate_record(raw, args.band_hz)
+    if record is not raw:
+        print(f"decimated from {raw.sample_rate_hz:g} Hz to {record.sample_rate_hz:g} Hz "
+              "(anti-aliased)")
     t1 = record.time_s[0] if args.t_from is None else args.t_from
     t2 = record.time_s[-1] + record.dt if args.t_to is None else args.t_to
     block = record.block(t1, t2)
@@ -103,6 +101,59 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     written.append(plots.save_figure(fig, out / f"{stem}_filtered.png"))
     for path in written:
         print(f"wrote                  {path}")
+    return 0
+
+
+def _confidence(text: str) -> float:
+    value = _positive_float(text)
+    if not value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not valid; it must be in (0, 1)")
+    return value
+
+
+def cmd_monitor(args: argparse.Namespace) -> int:
+    """A filling estimate per window of a long torque record."""
+    from .drivetrain import DriveTrain
+    from .fit import Calibration
+    from .monitoring import monitor_record
+    from .record import TorqueRecord
+
+    calibration = Calibration.load(args.calibration)
+    drive = None if args.drive is None else DriveTrain.load(args.drive)
+    record = TorqueRecord.load(args.file)
+    result = monitor_record(record, calibration, step_s=args.step, drive=drive,
+                            confidence=args.confidence)
+    fit = calibration.fit
+    label = f"{calibration.label} " if calibration.label else ""
+    decimated = ("" if result.decimated_from_hz is None else
+                 f", decimated from {result.decimated_from_hz:g} Hz to "
+                 f"{result.sample_rate_hz:g} Hz")
+    lines = ", ".join(f"{f:.3f}" for f in result.lines_hz) or "none"
+    print(f"# calibration {args.calibration}: {label}{fit.equation()}, R^2 = {fit.r2:.4f}, "
+          f"levels {fit.x_min:g}..{fit.x_max:g}")
+    print(f"# record {args.file}: {record.duration_s:g} s at {record.sample_rate_hz:g} Hz"
+          f"{decimated}")
+    print(f"# windows of {result.window_s:g} s every {result.step_s:g} s: "
+          f"{len(result.windows)}; removed: mean, LTH near "
+          f"{calibration.lifters * calibration.rotation_hz:.3f} Hz, drive lines {lines} Hz")
+    percent = f"{100 * args.confidence:g}"
+    print(f"{'start_s':>9} {'end_s':>9} {'level':>8} {'low_' + percent:>8} "
+          f"{'high_' + percent:>8}  flag")
+    for w in result.windows:
+        flag = "outside" if w.outside else "ok"
+        print(f"{w.start_s:9.2f} {w.end_s:9.2f} {w.level:8.3f} {w.interval[0]:8.3f} "
+              f"{w.interval[1]:8.3f}  {flag}")
+    return 0
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    """The report of a campaign store."""
+    from .report import write_report
+
+    path = write_report(args.store, args.out, progress=not args.no_progress,
+                        block=None if args.block is None else tuple(args.block),
+                        bootstrap=args.bootstrap)
+    print(f"wrote {path}")
     return 0
 
 
@@ -154,6 +205,34 @@ def build_parser() -> argparse.ArgumentParser:
                         "faster than 2.5 x BAND_HZ are decimated to that rate first")
     p.add_argument("--out", default="out", help="folder for the plots (default out)")
     p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("monitor", help="filling estimate per window of a long torque record",
+                       description="Slides windows of the calibration's block length over a "
+                                   "torque record and prints one line per window: start and "
+                                   "end (s), estimated load level, its interval, and 'outside' "
+                                   "when the level lies outside the calibrated range.")
+    p.add_argument("file", help="CSV with columns time_s,torque_Nm (or a .npz record)")
+    p.add_argument("--calibration", required=True,
+                   help="calibration JSON (Calibration.save, or report's calibration_*.json)")
+    p.add_argument("--drive", help="drive.json describing motor and gears: their lines are removed")
+    p.add_argument("--step", type=_positive_float, default=None,
+                   help="step between windows, s (default: the window length)")
+    p.add_argument("--confidence", type=_confidence, default=0.95,
+                   help="confidence of the intervals, in (0, 1) (default 0.95)")
+    p.set_defaults(func=cmd_monitor)
+
+    p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",
+                       description="Analyses a campaign store (paper section 6) and writes "
+                                   "report.md with the Table 6 analogue, per-group and per-case "
+                                   "tables, Figs. 9-15 as PNG and a calibration per group.")
+    p.add_argument("store", help="campaign store directory")
+    p.add_argument("--out", default=None, help="output folder (default STORE/report)")
+    p.add_argument("--block", type=float, nargs=2, metavar=("T1", "T2"), default=None,
+                   help="block to analyse, s (default: as the campaign analysed it)")
+    p.add_argument("--bootstrap", type=_positive_int, default=1000,
+                   help="bootstrap replicates (default 1000)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_report)
 
     p = sub.add_parser("demo", help="the main job: a synthetic study written to --out")
     p.add_argument("--out", default="out", help="output folder (default out)")

@@ -1,9 +1,14 @@
-"""Log fit of energy against filling, calibration, and the filling estimate (paper section 6.4).
+"""Calibration and the filling estimate (paper section 6.4).
 
 The paper fits the per-unit spectral energy y against the load level x (1..7, particle filling in
-units of 40 %) with y = a ln(x) + b (Table 6). A :class:`Calibration` stores such a fit with the
-reference energy that made it per-unit and the analysis settings, so that a new record analysed
-the same way gives a filling estimate x = exp((y - b) / a).
+units of 40 %) with y = a ln(x) + b (Table 6; :mod:`millscope.logfit`, re-exported here). A
+:class:`Calibration` stores such a fit with the reference energy that made it per-unit and the
+analysis settings, so that a new record analysed the same way gives a filling estimate
+x = exp((y - b) / a) (:func:`estimate_fill`). :meth:`Calibration.from_results` makes one from a
+campaign's results (:func:`millscope.analysis.analyze_campaign`).
+
+Calibration files are JSON, format ``millscope-calibration-2``; files of format 1 (without
+``band_hz`` and ``block_relative_std``) are read too.
 """
 
 from __future__ import annotations
@@ -12,139 +17,34 @@ import json
 import math
 import os
 import warnings
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
-
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
-from scipy import stats
+from typing import TYPE_CHECKING, Any
 
 from ._files import atomic_write, read_json
+from .analysis import GroupAnalysis, analyze_block, analyze_campaign
+from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 from .record import TorqueRecord
-from .spectral import RemoveItem, lifter_harmonic_hz, spectral_energy
+from .spectral import RemoveItem, lifter_harmonic_hz
 
-__all__ = ["LogFit", "log_fit", "Calibration", "FillEstimate", "estimate_fill",
-           "OutsideCalibrationWarning"]
+if TYPE_CHECKING:
+    from .campaign import CaseResult
 
-CALIBRATION_FORMAT = "millscope-calibration-1"
+__all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit", "Calibration",
+           "FillEstimate", "estimate_fill", "OutsideCalibrationWarning"]
+
+CALIBRATION_FORMAT = "millscope-calibration-2"
+READABLE_FORMATS = ("millscope-calibration-1", CALIBRATION_FORMAT)
 
 
 class OutsideCalibrationWarning(UserWarning):
     """A filling estimate lies outside the range of levels the calibration was made from."""
 
 
-@dataclass(frozen=True)
-class LogFit:
-    """Least-squares fit y = a ln(x) + b.
-
-    Attributes
-    ----------
-    a, b : float
-        Slope against ln(x) and intercept (units of y).
-    r2 : float
-        Coefficient of determination.
-    a_stderr, b_stderr : float
-        Standard errors of a and b (nan with only 2 points).
-    n : int
-        Number of points.
-    x_min, x_max : float
-        Range of x fitted.
-    ln_x_mean, ln_x_sxx, residual_std : float
-        Mean of ln(x), sum of squared deviations of ln(x), and the residual standard deviation;
-        they give prediction intervals.
-    """
-
-    a: float
-    b: float
-    r2: float
-    a_stderr: float
-    b_stderr: float
-    n: int
-    x_min: float
-    x_max: float
-    ln_x_mean: float
-    ln_x_sxx: float
-    residual_std: float
-
-    def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
-        """y = a ln(x) + b."""
-        return self.a * np.log(np.asarray(x, dtype=np.float64)) + self.b
-
-    def inverse(self, y: ArrayLike) -> NDArray[np.float64] | float:
-        """x = exp((y - b) / a)."""
-        if self.a == 0:
-            raise ValueError("the fit has slope a = 0; y does not determine x")
-        result = np.exp((np.asarray(y, dtype=np.float64) - self.b) / self.a)
-        return float(result) if np.ndim(result) == 0 else result
-
-    def prediction_half_width(self, x: float, confidence: float = 0.95,
-                              observation_std: float = 0.0) -> float:
-        """Half-width of the prediction interval of a new y at x (units of y).
-
-        The new observation's own scatter is the larger of the fit's residual standard
-        deviation and ``observation_std`` (what the new y is known to scatter by, e.g. the
-        sampling spread of its energy): a fit through few points can underestimate it.
-        """
-        if self.n < 3 or not np.isfinite(self.residual_std):
-            return math.nan
-        t = stats.t.ppf(0.5 + confidence / 2, self.n - 2)
-        u = math.log(x)
-        mean_var = self.residual_std**2 * (1 / self.n + (u - self.ln_x_mean) ** 2 / self.ln_x_sxx)
-        new_var = max(self.residual_std, observation_std) ** 2
-        return float(t * math.sqrt(mean_var + new_var))
-
-    def equation(self) -> str:
-        """The fit as the paper writes it, e.g. ``y = -0.423 ln(x) + 0.9279``."""
-        sign = "+" if self.b >= 0 else "-"
-        return f"y = {self.a:.4g} ln(x) {sign} {abs(self.b):.4g}"
-
-
-def log_fit(x: ArrayLike, y: ArrayLike) -> LogFit:
-    """Fit y = a ln(x) + b by least squares (paper Table 6).
-
-    Parameters
-    ----------
-    x : array_like
-        Positive abscissae (load levels).
-    y : array_like
-        Values (per-unit energies).
-
-    Raises
-    ------
-    ValueError
-        for fewer than 2 points, non-positive or non-finite x, non-finite y, mismatched lengths
-        or all x equal.
-    """
-    xs = np.asarray(x, dtype=np.float64)
-    ys = np.asarray(y, dtype=np.float64)
-    if xs.ndim != 1 or xs.shape != ys.shape:
-        raise ValueError(f"x and y must be 1-D of equal length; got shapes {xs.shape}, {ys.shape}")
-    if xs.size < 2:
-        raise ValueError(f"log_fit needs at least 2 points; got {xs.size}")
-    if not (np.all(np.isfinite(xs)) and np.all(xs > 0)):
-        raise ValueError(f"x must be finite and > 0 for ln(x); got {xs.tolist()}")
-    if not np.all(np.isfinite(ys)):
-        raise ValueError(f"y must be finite; got {ys.tolist()}")
-    u = np.log(xs)
-    sxx = float(np.sum((u - u.mean()) ** 2))
-    if sxx == 0:
-        raise ValueError("all x are equal; a slope cannot be fitted")
-    a, b = np.polyfit(u, ys, 1)
-    residuals = ys - (a * u + b)
-    ss_res = float(np.sum(residuals**2))
-    ss_tot = float(np.sum((ys - ys.mean()) ** 2))
-    r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else 1.0
-    n = xs.size
-    if n > 2:
-        s = math.sqrt(ss_res / (n - 2))
-        a_se = s / math.sqrt(sxx)
-        b_se = s * math.sqrt(1 / n + u.mean() ** 2 / sxx)
-    else:
-        s = a_se = b_se = math.nan
-    return LogFit(a=float(a), b=float(b), r2=r2, a_stderr=a_se, b_stderr=b_se, n=n,
-                  x_min=float(xs.min()), x_max=float(xs.max()), ln_x_mean=float(u.mean()),
-                  ln_x_sxx=sxx, residual_std=s)
+def _plain(value: float) -> float | None:
+    """A float for JSON: None for nan."""
+    return float(value) if math.isfinite(value) else None
 
 
 @dataclass(frozen=True)
@@ -172,6 +72,18 @@ class Calibration:
         Further lines removed (drive-train harmonics), Hz.
     label : str
         Free text (material, speed ...).
+    meta : dict
+        JSON-able facts (:meth:`from_results` puts the group, its levels, per-unit energies,
+        bootstrap intervals and case hashes here).
+    band_hz : float or None
+        Upper edge of the band the energy counts, Hz (0 .. band_hz); None: up to the Nyquist
+        frequency of the record. A campaign's calibration counts up to the Nyquist frequency of
+        its records (50 Hz at 10 ms samples), so records sampled faster are compared over the
+        same band.
+    block_relative_std : float or None
+        How much one block's energy scattered in the calibration data (standard deviation over
+        mean, between seeds or sub-blocks); :func:`estimate_fill` takes a new block's energy
+        to scatter at least this much. None: unknown.
     """
 
     fit: LogFit
@@ -184,6 +96,8 @@ class Calibration:
     extra_lines_hz: tuple[float, ...] = ()
     label: str = ""
     meta: dict[str, Any] = field(default_factory=dict)
+    band_hz: float | None = None
+    block_relative_std: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.reference_energy > 0 and math.isfinite(self.reference_energy)):
@@ -192,7 +106,82 @@ class Calibration:
         if self.block_s <= 0:
             raise ValueError(f"Calibration.block_s = {self.block_s!r} is not valid; "
                              "it must be > 0 s")
+        if self.band_hz is not None and not (math.isfinite(self.band_hz) and self.band_hz > 0):
+            raise ValueError(f"Calibration.band_hz = {self.band_hz!r} is not valid; it must be "
+                             "> 0 Hz or None")
+        if self.block_relative_std is not None and not (
+                math.isfinite(self.block_relative_std) and self.block_relative_std >= 0):
+            raise ValueError(f"Calibration.block_relative_std = {self.block_relative_std!r} is "
+                             "not valid; it must be finite and >= 0, or None")
         lifter_harmonic_hz(self.lifters, self.rotation_hz)  # validates both
+
+    @classmethod
+    def from_results(cls, results: Iterable[CaseResult], *, group: str | None = None,
+                     bootstrap: int = 1000, confidence: float = 0.95, seed: int = 0,
+                     sub_blocks: int = 10) -> Calibration:
+        """The calibration of one group (particles x speed) of a campaign's results.
+
+        Parameters
+        ----------
+        results : iterable of CaseResult
+            E.g. ``Campaign.run()``; analysed by :func:`~millscope.analysis.analyze_campaign`.
+        group : str, optional
+            The group's name, e.g. ``"LDMS"``; needed when the results hold several groups.
+        bootstrap, confidence, seed, sub_blocks
+            As :func:`~millscope.analysis.analyze_campaign` (the intervals go into ``meta``).
+
+        Raises
+        ------
+        ValueError
+            when the results hold several groups and none is chosen, or the chosen one is not
+            there (the message names the groups); when the group has a single load level.
+        """
+        groups = analyze_campaign(results, bootstrap=bootstrap, confidence=confidence,
+                                  seed=seed, sub_blocks=sub_blocks)
+        names = [g.name for g in groups]
+        if group is None:
+            if len(groups) > 1:
+                raise ValueError(f"the results hold {len(groups)} groups ({', '.join(names)}); "
+                                 "choose one with group=...")
+            return cls.from_group(groups[0])
+        for g in groups:
+            if g.name == group:
+                return cls.from_group(g)
+        raise ValueError(f"group = {group!r} is not among the groups of the results: "
+                         f"{', '.join(names)}")
+
+    @classmethod
+    def from_group(cls, group: GroupAnalysis) -> Calibration:
+        """The calibration of an analysed group: its fit, its largest level energy as the
+        reference, its analysis settings, the band up to the Nyquist frequency of its records,
+        and the scatter of one block's energy it showed.
+
+        Raises
+        ------
+        ValueError
+            when the group has a single load level (no fit).
+        """
+        g = group
+        if g.fit is None:
+            raise ValueError(f"group {g.name} has a single load level ({g.levels[0]:g}); a "
+                             "calibration needs at least 2")
+        nyquist = {0.5 * r.record.sample_rate_hz for r in g.results if r.record is not None}
+        band = min(nyquist) if nyquist else None
+        meta = {
+            "source": "campaign", "group": g.name, "particles": g.particles,
+            "speed_fraction": g.speed_fraction, "block": list(g.settings.block),
+            "levels": g.levels.tolist(), "repeats": g.repeats.tolist(),
+            "energy": g.energy.tolist(), "energy_pu": g.energy_pu.tolist(),
+            "a_interval": [_plain(v) for v in g.a_interval],
+            "b_interval": [_plain(v) for v in g.b_interval],
+            "confidence": g.confidence, "bootstrap": g.bootstrap,
+            "interval_source": list(g.interval_source),
+            "cases": [r.hash for r in g.results],
+        }
+        return cls(fit=g.fit, reference_energy=float(g.energy.max()), lifters=g.lifters,
+                   rotation_hz=g.rotation_hz, block_s=g.settings.block_s,
+                   bandwidth=g.settings.bandwidth, window=g.settings.window, label=g.name,
+                   meta=meta, band_hz=band, block_relative_std=g.block_relative_std())
 
     @property
     def remove(self) -> list[RemoveItem]:
@@ -200,8 +189,15 @@ class Calibration:
         return ["mean", lifter_harmonic_hz(self.lifters, self.rotation_hz), *self.extra_lines_hz]
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write the calibration as JSON, atomically."""
+        """Write the calibration as JSON, atomically.
+
+        The fit's undefined values (the standard errors of a fit through 2 points) are written
+        as ``null``, not as the ``NaN`` that standard JSON does not have; :meth:`load` reads
+        them back as nan.
+        """
         data = {"format": CALIBRATION_FORMAT, **asdict(self)}
+        data["fit"] = {k: _plain(v) if isinstance(v, float) else v
+                       for k, v in data["fit"].items()}
         target = Path(path)
         with atomic_write(target, "w") as fh:
             json.dump(data, fh, indent=2)
@@ -209,67 +205,102 @@ class Calibration:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Calibration:
-        """Read a calibration written by :meth:`save`; a damaged file raises ValueError."""
+        """Read a calibration written by :meth:`save` (format 2, or format 1); a damaged file
+        raises ValueError."""
         source = Path(path)
         data = read_json(source, "calibration")
-        if not isinstance(data, dict) or data.pop("format", None) != CALIBRATION_FORMAT:
+        if not isinstance(data, dict) or data.pop("format", None) not in READABLE_FORMATS:
             raise ValueError(f"{source}: not a millscope calibration (expected format "
-                             f"{CALIBRATION_FORMAT!r})")
+                             f"{' or '.join(repr(f) for f in READABLE_FORMATS)})")
         try:
-            data["fit"] = LogFit(**data["fit"])
+            data["fit"] = LogFit(**{k: math.nan if v is None else v
+                                    for k, v in data["fit"].items()})
             data["extra_lines_hz"] = tuple(data.get("extra_lines_hz", ()))
             return cls(**data)
-        except (KeyError, TypeError) as exc:
+        except (AttributeError, KeyError, TypeError) as exc:
             raise ValueError(f"{source}: calibration is incomplete or damaged ({exc})") from None
 
 
 @dataclass(frozen=True)
 class FillEstimate:
-    """A filling estimate: ``level`` (load level units, Table 5), ``interval`` (low, high) from
-    the calibration's prediction interval, ``energy_pu`` the per-unit energy it came from."""
+    """A filling estimate.
+
+    Attributes
+    ----------
+    level : float
+        Estimated load level (Table 5 units).
+    interval : (float, float)
+        (low, high) from the calibration's prediction interval (nan when the fit has fewer
+        than 3 points).
+    energy_pu : float
+        The per-unit energy it came from.
+    energy : float
+        The block's spectral energy, (N m)^2 s.
+    outside : bool
+        True when ``level`` lies outside the calibrated range (a warning was issued).
+    """
 
     level: float
     interval: tuple[float, float]
     energy_pu: float
     energy: float
+    outside: bool = False
 
 
 def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
-                  confidence: float = 0.95) -> FillEstimate:
+                  confidence: float = 0.95, lines_hz: Sequence[float] = ()) -> FillEstimate:
     """Estimate the load level of the mill from a torque block, x = exp((y - b)/a).
 
-    The block is analysed as the calibration was made: the same window and bandwidth, the mean,
-    the LTH and the extra lines removed. Its length must match ``calibration.block_s`` within
-    one sample, since energy grows with the block length. The interval is the fit's prediction
-    interval, with the new energy's scatter taken as the larger of the fit's residuals and the
-    block's own sampling spread (:attr:`SpectralEnergy.relative_std`). Warns with
-    :class:`OutsideCalibrationWarning` outside the calibrated range.
+    The block is analysed as the calibration was made
+    (:func:`~millscope.analysis.analyze_block`): the same window and bandwidth, the mean, the
+    LTH (located near lifters x rotation frequency, as a campaign locates it), the extra lines
+    and ``lines_hz`` removed, the energy counted over 0 .. ``band_hz``. Its length must match
+    ``calibration.block_s`` within one sample, since energy grows with the block length. The
+    interval is the fit's prediction interval, with the new energy's scatter taken as the
+    largest of the fit's residuals, the block's own sampling spread
+    (:attr:`SpectralEnergy.relative_std`) and the calibration's ``block_relative_std``. Warns
+    with :class:`OutsideCalibrationWarning` outside the calibrated range.
+
+    Parameters
+    ----------
+    record : TorqueRecord
+        A block of ``calibration.block_s`` s.
+    calibration : Calibration
+    confidence : float
+        Of the interval, in (0, 1).
+    lines_hz : sequence of float
+        Further lines to remove, Hz (e.g. a drive train's, :mod:`millscope.drivetrain`).
     """
     cal = calibration
+    if not 0 < confidence < 1:
+        raise ValueError(f"confidence = {confidence!r} is not valid; it must be in (0, 1)")
     if abs(record.duration_s - cal.block_s) > record.dt * 1.5:
         raise ValueError(f"record is {record.duration_s:g} s long but the calibration was made "
                          f"on blocks of block_s = {cal.block_s:g} s; pass a block of that length")
-    e = spectral_energy(record, cal.remove, bandwidth=cal.bandwidth,
-                        window=cal.window)  # type: ignore[arg-type]  # a str, checked at run time
+    nyquist = 0.5 * record.sample_rate_hz
+    if cal.band_hz is not None and cal.band_hz > nyquist * (1 + 1e-9):
+        raise ValueError(f"the calibration counts energy up to band_hz = {cal.band_hz:g} Hz but "
+                         f"the record, sampled at {record.sample_rate_hz:g} Hz, stops at "
+                         f"{nyquist:g} Hz; it needs at least {2 * cal.band_hz:g} Hz")
+    analysis = analyze_block(record, lifters=cal.lifters, rotation_hz=cal.rotation_hz,
+                             lines_hz=[*cal.extra_lines_hz, *lines_hz],
+                             window=cal.window,  # type: ignore[arg-type]  # checked at run time
+                             bandwidth=cal.bandwidth,
+                             band_hz=None if cal.band_hz is None else (0.0, cal.band_hz))
+    e = analysis.energy
     y = e.energy / cal.reference_energy
-    level = cal.fit.inverse(y)
-    half = cal.fit.prediction_half_width(float(level), confidence,
-                                         observation_std=y * e.relative_std)
+    level = float(cal.fit.inverse(y))
+    scatter = max(e.relative_std, cal.block_relative_std or 0.0)
+    half = cal.fit.prediction_half_width(level, confidence, observation_std=y * scatter)
     if math.isfinite(half):
         bounds = sorted(float(cal.fit.inverse(y + s * half)) for s in (-1, 1))
         interval = (bounds[0], bounds[1])
     else:
         interval = (math.nan, math.nan)
-    if not cal.fit.x_min <= level <= cal.fit.x_max:
-        warnings.warn(f"estimated level {float(level):.3g} lies outside the calibrated range "
+    outside = not cal.fit.x_min <= level <= cal.fit.x_max
+    if outside:
+        warnings.warn(f"estimated level {level:.3g} lies outside the calibrated range "
                       f"{cal.fit.x_min:g} .. {cal.fit.x_max:g}", OutsideCalibrationWarning,
                       stacklevel=2)
-    return FillEstimate(level=float(level), interval=interval, energy_pu=y, energy=e.energy)
-
-
-def per_unit(energies: ArrayLike) -> NDArray[np.float64]:
-    """Energies divided by the largest of the group (DESIGN.md section 4)."""
-    e = np.asarray(energies, dtype=np.float64)
-    if e.size == 0 or not np.all(np.isfinite(e)) or e.max() <= 0:
-        raise ValueError(f"energies must be finite with a positive maximum; got {e.tolist()}")
-    return e / e.max()
+    return FillEstimate(level=level, interval=interval, energy_pu=y, energy=e.energy,
+                        outside=outside)

@@ -1,4 +1,4 @@
-"""Figures of the paper's section 6 (Figs. 2, 10, 12-15). Every function returns a Figure.
+"""Figures of the paper's section 6 (Figs. 2, 9-15). Every function returns a Figure.
 
 Figures are built with :class:`matplotlib.figure.Figure` directly, never through pyplot, so they
 hold no global state (nothing to close, nothing leaks), work headless without choosing a backend,
@@ -30,6 +30,7 @@ from .record import TorqueRecord
 from .spectral import Spectrum
 
 __all__ = ["plot_torque", "plot_spectrum", "plot_filtered", "plot_waterfall",
+           "plot_spectra_grid", "plot_torque_levels", "plot_lth_levels", "plot_energy_levels",
            "plot_energy_fit", "plot_energy_fits", "save_figure"]
 
 
@@ -362,7 +363,193 @@ def plot_waterfall(spectra: Sequence[Spectrum], labels: Sequence[str], *,
     return fig
 
 
+def plot_spectra_grid(spectra: Sequence[Spectrum], labels: Sequence[str], *,
+                      lth_hz: Sequence[float | None] | None = None, fmax_hz: float | None = None,
+                      ncols: int = 2, same_scale: bool = True, title: str | None = None
+                      ) -> Figure:
+    """Several spectra in a grid of panels a), b), ... with the LTH marked (paper Fig. 10).
+
+    Each panel is :func:`plot_spectrum` of one spectrum (a shared frequency axis), titled with
+    its letter and label, e.g. "a) HDMS1". With ``same_scale`` every panel gets the amplitude
+    range of the tallest, so that the noise falling with the filling shows (paper section 6.3).
+
+    Parameters
+    ----------
+    spectra : sequence of Spectrum
+        Amplitude in N m, in panel order (e.g. rising filling level).
+    labels : sequence of str
+        One label per spectrum.
+    lth_hz : sequence of float or None, optional
+        Per spectrum, the LTH to mark, Hz (None: no arrow in that panel).
+    fmax_hz : float, optional
+        Highest frequency shown, Hz.
+    ncols : int
+        Panels per row, >= 1.
+    same_scale : bool
+        One amplitude range for all panels (else each its own).
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    Figure
+        One axes per spectrum, in order (``fig.axes``).
+
+    Raises
+    ------
+    ValueError
+        if ``spectra``, ``labels`` and ``lth_hz`` differ in length or are empty, or for a bad
+        ``ncols``.
+    """
+    n = len(spectra)
+    if n == 0:
+        raise ValueError("spectra is empty; give at least one spectrum")
+    marks = [None] * n if lth_hz is None else list(lth_hz)
+    if len(labels) != n or len(marks) != n:
+        raise ValueError(f"spectra has {n} entries, labels {len(labels)} and lth_hz "
+                         f"{len(marks)}; give one label and one LTH (or None) per spectrum")
+    if not isinstance(ncols, int) or isinstance(ncols, bool) or ncols < 1:
+        raise ValueError(f"ncols = {ncols!r} is not valid; it must be an integer >= 1")
+    cols = min(ncols, n)
+    rows = -(-n // cols)
+    fig = Figure(figsize=(4.6 * cols, 2.7 * rows + 0.4), layout="constrained")
+    axes = fig.subplots(rows, cols, sharex=True, squeeze=False).ravel()
+    letters = "abcdefghijklmnopqrstuvwxyz"
+    for i, (spec, label, mark) in enumerate(zip(spectra, labels, marks, strict=True)):
+        prefix = f"{letters[i]}) " if i < len(letters) else ""
+        plot_spectrum(spec, lth_hz=mark, ax=axes[i], fmax_hz=fmax_hz, title=f"{prefix}{label}")
+        if i % cols:
+            axes[i].set_ylabel("")
+        if i < n - cols:
+            axes[i].set_xlabel("")
+        else:  # the lowest panel of its column: its frequency ticks are the column's
+            axes[i].xaxis.set_tick_params(labelbottom=True)
+    if same_scale:
+        top = max(ax.get_ylim()[1] for ax in axes[:n])
+        for ax in axes[:n]:
+            ax.set_ylim(0.0, top)
+    for ax in axes[n:]:
+        fig.delaxes(ax)
+    fig.suptitle(title or "Torque spectra with the LTH marked")
+    return fig
+
+
 # -- energy against filling ------------------------------------------------------------------
+GroupSeries = tuple[ArrayLike, ArrayLike] | tuple[ArrayLike, ArrayLike, ArrayLike | None]
+
+
+def _plot_against_level(groups: Mapping[str, GroupSeries], *, ylabel: str, title: str,
+                        ax: Axes | None, intervals: bool) -> Figure:
+    """One line of markers per group, a quantity against load level; with ``intervals``, the
+    third item of a group's entry is a (2, n) array of absolute (low, high) bounds drawn as
+    error bars (None: no bars)."""
+    if not groups:
+        raise ValueError("groups is empty; give at least one group")
+    fig, ax, made = _axes(ax, (6.5, 4.5))
+    for i, (name, entry) in enumerate(groups.items()):
+        if not isinstance(entry, tuple) or len(entry) not in (2, 3):
+            raise ValueError(f"groups[{name!r}] must be (levels, values) or "
+                             "(levels, values, bounds)")
+        try:
+            x, y = _check_pairs(entry[0], entry[1])
+        except ValueError as exc:
+            raise ValueError(f"groups[{name!r}]: {exc}") from None
+        yerr = None
+        bounds = entry[2] if len(entry) == 3 else None
+        if bounds is not None:
+            if not intervals:
+                raise ValueError(f"groups[{name!r}] has bounds, which this figure does not draw")
+            b = np.asarray(bounds, dtype=np.float64)
+            if b.shape != (2, x.size):
+                raise ValueError(f"groups[{name!r}]: bounds has shape {b.shape}; give a "
+                                 f"(2, {x.size}) array of low and high values")
+            if np.all(np.isfinite(b)):
+                # a percentile interval need not hold its estimate: clip the bar at the point
+                yerr = np.clip(np.vstack([y - b[0], b[1] - y]), 0.0, None)
+        order = np.argsort(x)
+        ax.errorbar(x[order], y[order], yerr=None if yerr is None else yerr[:, order],
+                    fmt="-", marker=_MARKERS[i % len(_MARKERS)], ms=6, lw=1.1, capsize=3,
+                    label=name)
+    ax.set_xlabel("load level x (particle filling in units of 40 %)")
+    ax.set_ylabel(ylabel)
+    _set_title(ax, title, title, made)
+    _grid(ax)
+    ax.legend(fontsize="small")
+    return fig
+
+
+def plot_torque_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,
+                       ax: Axes | None = None, title: str | None = None) -> Figure:
+    """Mean torque per unit of each group's largest against load level (paper Fig. 9).
+
+    Parameters
+    ----------
+    groups : mapping of str to (levels, torque_pu)
+        Per group (e.g. "HDMS"): load levels and mean torques per unit (dimensionless).
+    ax : Axes, optional
+        Draw here instead of in a new figure.
+    title : str, optional
+
+    Returns
+    -------
+    Figure
+        One errorbar container per group (``ax.containers``), labelled with its name.
+    """
+    return _plot_against_level(groups, ylabel="mean torque (per unit)",
+                               title=title or "Average torque against filling level", ax=ax,
+                               intervals=False)
+
+
+def plot_lth_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,
+                    ax: Axes | None = None, title: str | None = None) -> Figure:
+    """Amplitude of the lifter torque harmonic against load level (paper Fig. 11).
+
+    Parameters
+    ----------
+    groups : mapping of str to (levels, amplitude)
+        Per group: load levels and LTH amplitudes, N m.
+    ax : Axes, optional
+    title : str, optional
+
+    Returns
+    -------
+    Figure
+        One errorbar container per group.
+    """
+    return _plot_against_level(groups, ylabel="LTH amplitude (N m)",
+                               title=title or "Lifter torque harmonic against filling level",
+                               ax=ax, intervals=False)
+
+
+def plot_energy_levels(groups: Mapping[str, GroupSeries], *, ax: Axes | None = None,
+                       title: str | None = None) -> Figure:
+    """Spectral energy per unit of each group's largest against load level (paper Fig. 14).
+
+    Parameters
+    ----------
+    groups : mapping of str to (levels, energy_pu) or (levels, energy_pu, bounds)
+        Per group: load levels, per-unit energies and optionally their interval as a (2, n)
+        array of (low, high) values (e.g. ``GroupAnalysis.energy_pu_interval``), drawn as error
+        bars; all-nan bounds draw none.
+    ax : Axes, optional
+    title : str, optional
+
+    Returns
+    -------
+    Figure
+        One errorbar container per group.
+
+    Raises
+    ------
+    ValueError
+        for an empty mapping, levels and values that do not pair up, or bounds of the wrong
+        shape (the message names the group).
+    """
+    return _plot_against_level(groups, ylabel="spectral energy (per unit)",
+                               title=title or "Spectrum energy against filling level", ax=ax,
+                               intervals=True)
+
+
 def _check_pairs(levels: ArrayLike, energies_pu: ArrayLike
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     x = np.asarray(levels, dtype=np.float64)

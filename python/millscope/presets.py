@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from numbers import Integral, Real
@@ -38,7 +39,9 @@ __all__ = [
     "PARTICLE_DIAMETER",
     "SCALES",
     "SLICE_MIN_BALLS",
+    "CaseKey",
     "axial_slice",
+    "case_key",
     "case_name",
     "paper_cases",
     "pilot_mill",
@@ -190,6 +193,78 @@ def case_name(particles: str | None, speed_fraction: float, load_level: int = 1)
         return f"balls-{code}" if code else f"balls-{speed * 100:g}%"
     prefix = PARTICLE_KINDS[kind]
     return f"{prefix}{code}#{level}" if code else f"{prefix}-{speed * 100:g}%#{level}"
+
+
+_LEVEL_IN_NAME = re.compile(r"#(\d+)$")
+_MATERIAL_KINDS: Mapping[str, str] = MappingProxyType({"ceramic": "ceramic",
+                                                      STEEL_PARTICLE: "steel"})
+
+
+@dataclass(frozen=True)
+class CaseKey:
+    """What a campaign's analysis groups a case by (:func:`case_key`).
+
+    Attributes
+    ----------
+    particles : str or None
+        "ceramic" (LD), "steel" (HD), another material's name, or None (balls only).
+    speed_fraction : float or None
+        Fraction of critical speed (None when the scene gives its speed in Hz).
+    rotation_hz : float
+        Rotation frequency, Hz.
+    load_level : float or None
+        Table 5's level (particle filling in units of 40 %); None for balls only.
+    group : str
+        The case code without its level, e.g. ``"LDMS"``, ``"HD-75%"``, ``"balls-MS"``.
+    """
+
+    particles: str | None
+    speed_fraction: float | None
+    rotation_hz: float
+    load_level: float | None
+    group: str
+
+
+def case_key(scene: Scene) -> CaseKey:
+    """The particles, speed and load level of a scene, as :func:`pilot_mill` built it.
+
+    The particles are the material of the fraction named "particles" ("ceramic" stays
+    "ceramic", "steel_particle" reads "steel"); without such a fraction the case is balls
+    only. The load level is the ``#k`` that ends the scene's name (:func:`case_name`);
+    a scene named otherwise gets the ratio of its particle count to its ball count in units
+    of the paper's, 4062 / 2466 per level (exact at paper scale, within 1 % at the reduced
+    scales whose counts are rounded).
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Returns
+    -------
+    CaseKey
+    """
+    by_name = {f.name: f for f in scene.charge}
+    particles = by_name.get("particles")
+    speed = scene.speed_fraction
+    if particles is None:
+        kind, level = None, None
+    else:
+        kind = _MATERIAL_KINDS.get(particles.material, particles.material)
+        match = _LEVEL_IN_NAME.search(scene.name)
+        balls = by_name.get("balls")
+        if match is not None:
+            level = float(match.group(1))
+        elif balls is not None:
+            level = particles.count / balls.count * BALL_COUNT / PARTICLES_PER_LEVEL
+        else:
+            level = None
+    if speed is not None and (kind is None or kind in PARTICLE_KINDS):
+        group = case_name(kind, speed).split("#")[0]
+    else:
+        prefix = "balls" if kind is None else PARTICLE_KINDS.get(kind, kind)
+        group = (f"{prefix}-{speed * 100:g}%" if speed is not None
+                 else f"{prefix}-{scene.rotation_hz:.4g}Hz")
+    return CaseKey(kind, speed, scene.rotation_hz, level, group)
 
 
 def pilot_mill(

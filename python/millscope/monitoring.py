@@ -1,0 +1,165 @@
+"""Filling-level monitoring: a calibration slid over a long torque record (paper section 6.5).
+
+:func:`monitor` cuts a long record into windows of the calibration's block length and estimates
+the load level of each (:func:`~millscope.estimate_fill`). Measured torque goes through the
+drive-train handling first: a record sampled faster than the calibration's band is decimated to
+it with an anti-aliasing filter (:func:`~millscope.drivetrain.decimate_record`), and the lines
+of a described drive (mill turn, shafts, gear meshes, motor; :mod:`millscope.drivetrain`) are
+removed besides the mean and the LTH. ``python -m millscope monitor`` prints the result, one
+line per window.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+from .drivetrain import DriveTrain, decimate_record
+from .fit import Calibration, OutsideCalibrationWarning, estimate_fill
+from .record import TorqueRecord
+
+__all__ = ["MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
+
+
+@dataclass(frozen=True)
+class WindowEstimate:
+    """The filling estimate of one window.
+
+    Attributes
+    ----------
+    start_s, end_s : float
+        The window ``start_s <= t < end_s``, s (record time).
+    level : float
+        Estimated load level (Table 5 units).
+    interval : (float, float)
+        Its prediction interval (:func:`~millscope.estimate_fill`).
+    energy_pu : float
+        The window's spectral energy per unit of the calibration's reference.
+    outside : bool
+        True when ``level`` lies outside the calibrated range.
+    """
+
+    start_s: float
+    end_s: float
+    level: float
+    interval: tuple[float, float]
+    energy_pu: float
+    outside: bool
+
+
+@dataclass(frozen=True)
+class MonitorResult:
+    """:func:`monitor_record`'s result: the windows and what was done to the record.
+
+    Attributes
+    ----------
+    windows : list of WindowEstimate
+    window_s, step_s : float
+        Window length and step, s.
+    sample_rate_hz : float
+        Sampling rate analysed, Hz (after any decimation).
+    decimated_from_hz : float or None
+        The record's own rate when it was decimated, Hz.
+    lines_hz : tuple of float
+        Drive-train lines removed besides the mean and the LTH, Hz.
+    """
+
+    windows: list[WindowEstimate]
+    window_s: float
+    step_s: float
+    sample_rate_hz: float
+    decimated_from_hz: float | None
+    lines_hz: tuple[float, ...]
+
+
+def _length(name: str, value: float, dt: float) -> int:
+    """``value`` s as a whole number (>= 1) of samples of ``dt`` s."""
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} = {value!r} is not valid; it must be > 0 s")
+    samples = round(value / dt)
+    if samples < 1 or abs(samples * dt - value) > 0.5 * dt:
+        raise ValueError(f"{name} = {value!r} is not valid; it must be at least one sample "
+                         f"({dt:g} s)")
+    return samples
+
+
+def monitor_record(record: TorqueRecord, calibration: Calibration, *,
+                   window_s: float | None = None, step_s: float | None = None,
+                   drive: DriveTrain | None = None, confidence: float = 0.95) -> MonitorResult:
+    """Estimate the load level in consecutive windows of a long record.
+
+    Parameters
+    ----------
+    record : TorqueRecord
+        Torque, N m, simulated or measured; at least one window long.
+    calibration : Calibration
+    window_s : float, optional
+        Window length, s; it must be the calibration's ``block_s`` (the default), since
+        energies grow with the block length.
+    step_s : float, optional
+        Step between window starts, s, > 0 (default ``window_s``: windows side by side).
+    drive : DriveTrain, optional
+        The mill's drive: its lines up to the calibration's band are removed too (not the LTH,
+        which is located and removed anyway). Its lifter count must be the calibration's.
+    confidence : float
+        Of the intervals, in (0, 1).
+
+    Returns
+    -------
+    MonitorResult
+        One :class:`WindowEstimate` per window, in time order. Estimates outside the
+        calibrated range are flagged (``outside``), not warned about one by one.
+
+    Raises
+    ------
+    ValueError
+        for a bad argument (naming it, its value and the valid range) or a record shorter
+        than one window, before any window is analysed.
+    """
+    cal = calibration
+    if not isinstance(cal, Calibration):
+        raise ValueError(f"calibration = {cal!r} is not valid; it must be a Calibration")
+    if window_s is None:
+        window_s = cal.block_s
+    elif not (isinstance(window_s, (int, float)) and abs(window_s - cal.block_s) <= record.dt):
+        raise ValueError(f"window_s = {window_s!r} is not valid; it must be the calibration's "
+                         f"block_s = {cal.block_s:g} s (energies grow with the block length)")
+    if drive is not None:
+        if not isinstance(drive, DriveTrain):
+            raise ValueError(f"drive = {drive!r} is not valid; it must be a DriveTrain or None")
+        if drive.lifters != cal.lifters:
+            raise ValueError(f"drive.lifters = {drive.lifters} is not valid; it must be the "
+                             f"calibration's lifter count, {cal.lifters}")
+    analysed = record if cal.band_hz is None else decimate_record(record, cal.band_hz)
+    dt = analysed.dt
+    width = _length("window_s", window_s, dt)
+    step = _length("step_s", window_s if step_s is None else step_s, dt)
+    if len(analysed) < width:
+        raise ValueError(f"the record is {analysed.duration_s:g} s long, shorter than one window "
+                         f"of window_s = {window_s:g} s")
+    nyquist = 0.5 * analysed.sample_rate_hz
+    band = nyquist if cal.band_hz is None else min(cal.band_hz, nyquist)
+    lines = () if drive is None else tuple(drive.frequencies_hz(max_hz=band, include_lth=False))
+    t, x = analysed.time_s, analysed.torque_Nm
+    windows = []
+    for start in range(0, len(analysed) - width + 1, step):
+        block = TorqueRecord(t[start:start + width], x[start:start + width])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", OutsideCalibrationWarning)
+            est = estimate_fill(block, cal, confidence=confidence, lines_hz=lines)
+        windows.append(WindowEstimate(float(t[start]), float(t[start] + width * dt), est.level,
+                                      est.interval, est.energy_pu, est.outside))
+    return MonitorResult(windows=windows, window_s=width * dt, step_s=step * dt,
+                         sample_rate_hz=analysed.sample_rate_hz,
+                         decimated_from_hz=None if analysed is record else record.sample_rate_hz,
+                         lines_hz=lines)
+
+
+def monitor(record: TorqueRecord, calibration: Calibration, *, window_s: float | None = None,
+            step_s: float | None = None, drive: DriveTrain | None = None,
+            confidence: float = 0.95) -> list[WindowEstimate]:
+    """The filling estimate of every window of a long record: :func:`monitor_record`'s
+    windows (same parameters)."""
+    return monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
+                          confidence=confidence).windows

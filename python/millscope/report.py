@@ -1,0 +1,277 @@
+"""The report of a campaign store: the paper's section 6 as Markdown with PNG figures.
+
+:func:`write_report` reads a store (:meth:`~millscope.campaign.Campaign.from_store`), analyses
+it (:func:`~millscope.analysis.analyze_campaign`) and writes into one folder:
+
+* ``report.md``: the campaign at a glance, the Table 6 analogue (log fits with bootstrap
+  intervals), a table per group (per level: mean torque, LTH, energy per unit with its interval),
+  a table of every case, and the figures below;
+* ``fig09_torque.png`` (average torque per unit against filling), ``fig10_spectra_<group>.png``
+  (the spectra of a group with the LTH marked), ``fig11_lth.png`` (LTH amplitude against
+  filling), ``fig12_waterfall_<group>.png`` (Figs. 12-13, a waterfall per group),
+  ``fig14_energy.png`` (energy per unit against filling), ``fig15_fits.png`` (the log fits);
+* ``calibration_<group>.json``: a :class:`~millscope.Calibration` per group with a fit.
+
+``python -m millscope report STORE [--out DIR]`` runs it. Every file is written atomically.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from matplotlib.figure import Figure
+from tqdm.auto import tqdm
+
+from . import _core, plots
+from ._files import atomic_write
+from .analysis import GroupAnalysis, analyze_campaign, table6_markdown
+from .campaign import Campaign, CaseResult
+from .fit import Calibration
+from .presets import case_key
+from .spectral import spectrum
+
+__all__ = ["write_report"]
+
+REPORT_NAME = "report.md"
+
+
+def _slug(name: str) -> str:
+    """A file-name-safe form of a group's name ("LD-75%" -> "LD-75pct")."""
+    return re.sub(r"[^A-Za-z0-9_-]+", "_", name.replace("%", "pct")).strip("_") or "group"
+
+
+def _number(value: float, digits: int = 4) -> str:
+    return f"{value:.{digits}g}" if math.isfinite(value) else "-"
+
+
+@dataclass(frozen=True)
+class _Figure:
+    file: str
+    heading: str
+    caption: str
+    make: Callable[[], Figure]
+
+
+def _first_per_level(group: GroupAnalysis) -> list[CaseResult]:
+    """The case with the lowest seed at each level (the results are by level, then seed)."""
+    seen: dict[float, CaseResult] = {}
+    for r in group.results:
+        level = case_key(r.scene).load_level
+        if level is not None:
+            seen.setdefault(level, r)
+    return list(seen.values())
+
+
+def _spectra(group: GroupAnalysis) -> tuple[list, list[str], list[float | None]]:
+    cases = _first_per_level(group)
+    spectra = []
+    for r in cases:
+        assert r.record is not None
+        spectra.append(spectrum(r.record.block(*group.settings.block),
+                                window=group.settings.window))  # type: ignore[arg-type]
+    labels = [r.scene.name.replace("#", "") for r in cases]
+    marks = [r.lth_hz if math.isfinite(r.lth_hz) else None for r in cases]
+    return spectra, labels, marks
+
+
+def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
+    figs = [_Figure("fig09_torque.png", "Fig. 9: average torque",
+                    "Mean torque over the block per unit of each group's largest, against the "
+                    "load level (mean over the repeats of a level).",
+                    lambda: plots.plot_torque_levels(
+                        {g.name: (g.levels, g.torque_pu) for g in groups}))]
+    for g in groups:
+        def grid(g: GroupAnalysis = g) -> Figure:
+            spectra, labels, marks = _spectra(g)
+            return plots.plot_spectra_grid(spectra, labels, lth_hz=marks,
+                                           title=f"{g.name} torque spectra, LTH marked")
+        figs.append(_Figure(f"fig10_spectra_{_slug(g.name)}.png",
+                            f"Fig. 10: {g.name} spectra",
+                            "Amplitude spectra of the block (lowest seed of each level), the "
+                            "located LTH marked.", grid))
+    figs.append(_Figure("fig11_lth.png", "Fig. 11: lifter torque harmonic",
+                        "Amplitude of the LTH located in each block against the load level.",
+                        lambda: plots.plot_lth_levels(
+                            {g.name: (g.levels, g.lth_amplitude) for g in groups
+                             if g.lifters > 0})))
+    for g in groups:
+        def waterfall(g: GroupAnalysis = g) -> Figure:
+            spectra, labels, _ = _spectra(g)
+            return plots.plot_waterfall(spectra, labels, title=f"{g.name} torque spectra")
+        figs.append(_Figure(f"fig12_waterfall_{_slug(g.name)}.png",
+                            f"Figs. 12-13: {g.name} waterfall",
+                            "The spectra of the group by rising load level.", waterfall))
+    figs.append(_Figure("fig14_energy.png", "Fig. 14: spectrum energy",
+                        "Spectral energy with the mean and the LTH removed, per unit of each "
+                        "group's largest, with its bootstrap interval.",
+                        lambda: plots.plot_energy_levels(
+                            {g.name: (g.levels, g.energy_pu, g.energy_pu_interval)
+                             for g in groups})))
+    figs.append(_Figure("fig15_fits.png", "Fig. 15: logarithmic fits",
+                        "y = a ln(x) + b fitted to the per-unit energies of each group.",
+                        lambda: plots.plot_energy_fits(
+                            {g.name: (g.levels, g.energy_pu, g.fit) for g in groups})))
+    if not any(g.lifters > 0 for g in groups):
+        figs = [f for f in figs if f.file != "fig11_lth.png"]
+    return figs
+
+
+def _group_table(g: GroupAnalysis) -> list[str]:
+    rows = ["| level | cases | mean torque (N m) | torque p.u. | LTH (Hz) | LTH (N m) | "
+            "energy ((N m)² s) | energy p.u. [interval] | spread of one case | interval from |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for k, level in enumerate(g.levels):
+        lo, hi = g.energy_pu_interval[:, k]
+        interval = f" [{lo:.3g}, {hi:.3g}]" if math.isfinite(lo) else ""
+        spread = g.energy_relative_std[k]
+        rows.append(f"| {level:g} | {g.repeats[k]} | {_number(g.mean_torque[k], 5)} | "
+                    f"{g.torque_pu[k]:.4f} | {_number(g.lth_hz[k])} | "
+                    f"{_number(g.lth_amplitude[k])} | {_number(g.energy[k])} | "
+                    f"{g.energy_pu[k]:.4f}{interval} | "
+                    f"{f'{100 * spread:.1f} %' if math.isfinite(spread) else '-'} | "
+                    f"{g.interval_source[k]} |")
+    return rows
+
+
+def _case_table(results: list[CaseResult]) -> list[str]:
+    rows = ["| case | seed | status | level | mean torque (N m) | LTH (Hz) | LTH (N m) | "
+            "energy ((N m)² s) | wall time (s) | hash |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        level = case_key(r.scene).load_level
+        rows.append(f"| {r.scene.name} | {r.case.settings.seed} | {r.status} | "
+                    f"{'-' if level is None else f'{level:g}'} | {_number(r.mean_torque, 5)} | "
+                    f"{_number(r.lth_hz)} | {_number(r.lth_amplitude)} | {_number(r.energy)} | "
+                    f"{_number(r.wall_time_s, 3)} | `{r.hash[:12]}` |")
+    return rows
+
+
+def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | None = None, *,
+                 progress: bool = True, block: tuple[float, float] | None = None,
+                 bootstrap: int = 1000, confidence: float = 0.95, seed: int = 0,
+                 sub_blocks: int = 10) -> Path:
+    """Write the report of a campaign store (see the module docstring).
+
+    Parameters
+    ----------
+    store : str or path
+        A campaign store directory (:class:`~millscope.Campaign`).
+    out : str or path, optional
+        Folder for the report, created if needed; default ``STORE/report``.
+    progress : bool
+        Show a tqdm bar over the figures.
+    block : (float, float), optional
+        Block to analyse, s; default: as the store's campaign analysed its cases.
+    bootstrap, confidence, seed, sub_blocks
+        As :func:`~millscope.analysis.analyze_campaign`.
+
+    Returns
+    -------
+    Path
+        The written ``report.md``.
+
+    Raises
+    ------
+    ValueError
+        before anything is written: for a path that is not a campaign store, a store without
+        a finished case, or a bad argument.
+    """
+    campaign = Campaign.from_store(store, block=block)
+    results = campaign.results()
+    done = [r for r in results if r.status == "done"]
+    if not done:
+        raise ValueError(f"store {campaign.store} holds no finished case ({len(results)} "
+                         "failed); nothing to report")
+    if campaign.analysis is None:
+        raise ValueError(f"store {campaign.store} does not say which block to analyse (its "
+                         "campaign ran with block=None); pass block=(t1, t2)")
+    with_levels = [r for r in done if case_key(r.scene).load_level is not None]
+    groups = (analyze_campaign(results, bootstrap=bootstrap, confidence=confidence, seed=seed,
+                               sub_blocks=sub_blocks) if with_levels else [])
+    target = Path(out) if out is not None else campaign.store / "report"
+    target.mkdir(parents=True, exist_ok=True)
+
+    figures = _figures(groups) if groups else []
+    written: list[_Figure] = []
+    for fig in tqdm(figures, desc="report figures", unit="figure", disable=not progress):
+        plots.save_figure(fig.make(), target / fig.file)
+        written.append(fig)
+    calibrations: dict[str, str] = {}
+    for g in groups:
+        if g.fit is not None:
+            name = f"calibration_{_slug(g.name)}.json"
+            Calibration.from_group(g).save(target / name)
+            calibrations[g.name] = name
+
+    settings = campaign.analysis
+    t1, t2 = settings.block
+    counts = {s: sum(r.status == s for r in results) for s in ("done", "failed", "pending")}
+    lines = [
+        "# millscope campaign report",
+        "",
+        f"Store `{campaign.store}`: {len(results)} cases with files, {counts['done']} done, "
+        f"{counts['failed']} failed. millscope {_core.build_info()['version']}, "
+        f"{time.strftime('%Y-%m-%d %H:%M')}.",
+        "",
+        f"Analysis (paper section 6): block {t1:g} <= t < {t2:g} s (TR = {t2 - t1:g} s, "
+        f"df = {1 / (t2 - t1):.3g} Hz), {settings.window} window; the mean and the LTH "
+        f"(located near lifters x rotation frequency) removed in bands of {settings.bandwidth:g}"
+        " Hz (widened to the window's main lobe when narrower); energy is eq. (11). Per unit: "
+        "divided by the group's largest level energy (the lowest filling).",
+        "",
+    ]
+    if groups:
+        percent = f"{100 * confidence:g} %"
+        lines += [
+            "## Table 6 analogue: log fits of energy against filling",
+            "",
+            table6_markdown(groups),
+            f"Intervals: {percent} percentile bootstrap, {bootstrap} replicates (seed {seed}). "
+            "At a level with repeats (other seeds), the mean of its repeats is resampled from "
+            "the relative seed-to-seed deviations pooled over all such levels of the group; at "
+            f"a level with one case, the energies of up to {sub_blocks} sub-blocks of its block "
+            "are resampled, widened to the block spectrum's sampling spread where that is "
+            "larger. Every replicate is made per unit and fitted again. *seeds* / "
+            "*blocks* / *none* in the last column say which; *none* (a block too short to cut) "
+            "leaves the group without intervals. The level with the largest energy is the "
+            "per-unit reference: its value is 1 by construction, and so, nearly always, is its "
+            "interval.",
+            "",
+        ]
+    else:
+        lines += ["No group to analyse: no finished case has particles to grind and a load "
+                  "level (balls-only cases have none).", ""]
+    for g in groups:
+        speed = ("" if g.speed_fraction is None
+                 else f"{100 * g.speed_fraction:g} % of critical, ")
+        lines += [f"## {g.name}", "",
+                  f"Particles: {g.particles}; {speed}{g.rotation_hz:.4f} Hz, {g.lifters} lifters "
+                  f"(LTH expected at {g.lifters * g.rotation_hz:.3f} Hz).", ""]
+        if g.fit is not None:
+            lines += [f"Fit: {g.fit.equation()}, R² = {g.fit.r2:.4f}.", ""]
+        lines += _group_table(g) + [""]
+        if g.name in calibrations:
+            lines += [f"Calibration: [`{calibrations[g.name]}`]({calibrations[g.name]}).", ""]
+    if written:
+        lines += ["## Figures", ""]
+        for fig in written:
+            lines += [f"### {fig.heading}", "", fig.caption, "", f"![{fig.heading}]({fig.file})",
+                      ""]
+    lines += ["## Cases", ""] + _case_table(results) + [""]
+    failed = [r for r in results if r.status == "failed"]
+    if failed:
+        lines += ["## Failed cases", ""]
+        lines += [f"- {r.scene.name} seed {r.case.settings.seed} (`{r.hash[:12]}`): "
+                  f"{(r.error or '').splitlines()[0] if r.error else 'no message'}"
+                  for r in failed]
+        lines += [""]
+    report = target / REPORT_NAME
+    with atomic_write(report, "w") as fh:
+        fh.write("\n".join(lines))
+    return report

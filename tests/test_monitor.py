@@ -1,0 +1,122 @@
+"""Monitoring: a calibration slid over a long record whose filling changes, simulated-like and
+measured-like (1 kHz, drive-train lines), from Python and from the command line."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import millscope as ms
+from millscope.cli import main
+from millscope.drivetrain import DriveTrain
+from millscope.monitoring import monitor_record
+from millscope.synthetic import synthetic_record
+
+from .synthetic_campaign import LAW, case_results, content_for
+
+SEGMENTS = (2.0, 5.0, 3.0)  # load levels of three 20 s stretches of one long record
+SEGMENT_S = 20.0
+MOTOR_HZ = 23.1
+
+
+@pytest.fixture(scope="module")
+def calibration() -> ms.Calibration:
+    return ms.Calibration.from_results(case_results(family=21))
+
+
+def long_record(*, sample_rate_hz: float = 100.0, noise_scale: float = 1.0,
+                lines: tuple[tuple[float, float], ...] = ()) -> ms.TorqueRecord:
+    """Three stretches at the SEGMENTS levels, one after the other."""
+    scene = ms.presets.pilot_mill(0.71, "ceramic", 1, scale="tiny")
+    content = content_for(scene, LAW, noise_std_Nm=30.0 * noise_scale, lines=lines)
+    parts = [synthetic_record(level, content=content, duration_s=SEGMENT_S,
+                              sample_rate_hz=sample_rate_hz, seed=40 + k)
+             for k, level in enumerate(SEGMENTS)]
+    torque = np.concatenate([p.torque_Nm for p in parts])
+    return ms.TorqueRecord(np.arange(torque.size) / sample_rate_hz, torque)
+
+
+def truth(window: ms.WindowEstimate) -> float:
+    return SEGMENTS[int(window.start_s // SEGMENT_S)]
+
+
+def test_windows_follow_the_filling(calibration) -> None:
+    windows = ms.monitor(long_record(), calibration)
+    assert [(w.start_s, w.end_s) for w in windows] == [(10.0 * k, 10.0 * k + 10.0)
+                                                       for k in range(6)]
+    for w in windows:
+        assert w.interval[0] <= truth(w) <= w.interval[1]
+        assert not w.outside
+    overlapping = ms.monitor(long_record(), calibration, step_s=2.5)
+    assert len(overlapping) == 21 and overlapping[1].start_s == 2.5
+
+
+def test_a_measured_record_is_decimated_and_its_drive_lines_removed(calibration) -> None:
+    """1 kHz with a 40 N m motor line: decimated to 125 Hz, only 0-50 Hz counted, the drive's
+    lines removed. The noise has the density of the 100 Hz records in the band (10 x the
+    variance at 10 x the rate)."""
+    record = long_record(sample_rate_hz=1000.0, noise_scale=np.sqrt(10.0),
+                         lines=((MOTOR_HZ, 40.0),))
+    drive = DriveTrain.from_dict({"motor": {"pole_pairs": 2, "speed_hz": MOTOR_HZ},
+                                  "stages": [{"ratio": MOTOR_HZ / calibration.rotation_hz}],
+                                  "lifters": 16})
+    result = monitor_record(record, calibration, drive=drive)
+    assert result.decimated_from_hz == pytest.approx(1000.0)
+    assert result.sample_rate_hz == pytest.approx(125.0)
+    assert MOTOR_HZ in result.lines_hz
+    for w in result.windows:
+        assert w.interval[0] <= truth(w) <= w.interval[1]
+    without = ms.monitor(record, calibration)  # the motor line counted as grinding noise
+    assert all(w.outside and w.level < 1.0 for w in without)
+
+
+def test_bad_arguments_are_refused_before_any_window(calibration) -> None:
+    record = long_record()
+    with pytest.raises(ValueError, match="window_s = 5 .* block_s = 10 s"):
+        ms.monitor(record, calibration, window_s=5)
+    with pytest.raises(ValueError, match="step_s = 0 is not valid"):
+        ms.monitor(record, calibration, step_s=0)
+    with pytest.raises(ValueError, match="shorter than one window"):
+        ms.monitor(record.block(0, 8), calibration)
+    drive = DriveTrain.from_dict({"motor": {"pole_pairs": 2, "speed_hz": 20.0}, "stages": [],
+                                  "lifters": 12})
+    with pytest.raises(ValueError, match="drive.lifters = 12 .* lifter count, 16"):
+        ms.monitor(record, calibration, drive=drive)
+
+
+def test_cli_prints_one_line_per_window(calibration, tmp_path, capsys) -> None:
+    cal = calibration.save(tmp_path / "cal.json")
+    csv = long_record().to_csv(tmp_path / "long.csv")
+    assert main(["monitor", str(csv), "--calibration", str(cal)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    rows = [line.split() for line in out if not line.startswith("#")]
+    assert rows[0] == ["start_s", "end_s", "level", "low_95", "high_95", "flag"]
+    windows = ms.monitor(ms.TorqueRecord.from_csv(csv), calibration)
+    assert len(rows) == 1 + len(windows)
+    for row, w in zip(rows[1:], windows, strict=True):
+        assert float(row[0]) == pytest.approx(w.start_s)
+        assert float(row[2]) == pytest.approx(w.level, abs=5e-4)
+        assert float(row[3]) <= truth(w) <= float(row[4])
+        assert row[5] == "ok"
+
+
+def test_cli_bad_input_is_one_line_and_exit_2(calibration, tmp_path, capsys) -> None:
+    cal = calibration.save(tmp_path / "cal.json")
+    short = long_record().block(0, 5).to_csv(tmp_path / "short.csv")
+    cases = [([str(short), "--calibration", str(cal)], "shorter than one window"),
+             ([str(short), "--calibration", str(tmp_path / "none.json")],
+              "no such calibration file"),
+             ([str(tmp_path / "none.csv"), "--calibration", str(cal)], "no such file")]
+    for args, message in cases:
+        assert main(["monitor", *args]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("millscope: error: ") and message in err
+        assert err.count("\n") == 1
+    run = subprocess.run([sys.executable, "-m", "millscope", "monitor", str(short),
+                          "--calibration", str(cal), "--step", "-1"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "--step: '-1' is not valid" in run.stderr
+    assert "Traceback" not in run.stderr
