@@ -62,9 +62,8 @@ class DemoPlan:
     ----------
     scale : str
         A scale of :data:`millscope.presets.SCALES`; ``"tiny"`` by default, the one that fits
-        four levels into about 5 minutes on 2 cores (LDMS#1..#4: 1036 to 2970 particles; about
-        9.5 minutes of one core for the four cases' 8.7 simulated seconds each, settling
-        included).
+        four levels into about 5 minutes on 2 free cores (LDMS#1..#4: 1036 to 2970 particles;
+        580-600 s of CPU for the four cases' 8.7 simulated seconds each, settling included).
     particles : {"ceramic", "steel"}
         Ceramic-like (LD) or steel-like (HD) particles to grind.
     speed_fraction : float

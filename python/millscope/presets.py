@@ -13,7 +13,8 @@ Scales (:data:`SCALES` says exactly what each changes):
   shear modulus x 0.01; for quick looks at a case (3 simulated seconds of a level-1 case:
   about 35 s on 2 cores).
 * ``"tiny"``: the small slice with every shear modulus x 0.001; for the main job
-  (``millscope demo``: LDMS #1-#4 in about 5 minutes on 2 cores) and unit tests.
+  (``millscope demo``: LDMS #1-#4 in about 10 minutes of CPU, 5 on 2 free cores) and unit
+  tests.
 * ``"soft"``: the paper's whole mill with every shear modulus x 0.001; for tests of
   whole-mill behaviour (lifter harmonic, mean torque).
 """
@@ -122,10 +123,10 @@ SCALES: Mapping[str, str] = MappingProxyType(
             f"shear modulus x {TINY_STIFFNESS} (Rayleigh time and default dt "
             f"x {1 / math.sqrt(TINY_STIFFNESS):.3g}); everything else as at paper scale. "
             "Overlaps reach several % of the radius. For the main job (millscope demo: "
-            "LDMS #1-#4, 1036 to 2970 particles, 8 s of rotation each, about 5 minutes on 2 "
-            "cores), the notebooks under test and unit tests. Cost: about 8 ms of one core "
-            "per particle and simulated second (LDMS #1-#4 for 14.7 s each, settling "
-            "included: 16 minutes of CPU)."
+            "LDMS #1-#4, 1036 to 2970 particles, 8 s of rotation each: about 10 minutes of "
+            "CPU, 5 on 2 free cores), the notebooks under test and unit tests. Cost: about "
+            "8 ms of one core per particle and simulated second (LDMS #1-#4 for 14.7 s "
+            "each, settling included: 16 minutes of CPU)."
         ),
         "soft": (
             f"The paper's whole mill and charge unchanged except every shear modulus "
