@@ -48,7 +48,7 @@ import socket
 import time
 import traceback
 import zipfile
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from numbers import Integral
 from pathlib import Path
@@ -86,6 +86,7 @@ _MIN_BLOCK_SAMPLES = 4  # the spectral analysis needs at least this many
 _TRACEBACK_FRAMES = 12  # frames kept in a failed case's traceback summary (the innermost)
 _TRACEBACK_CHARS = 8000
 _TERMINATE_WAIT_S = 10.0  # how long to wait for a terminated worker process to end, s
+_TICK_S = 5.0  # the progress bar is redrawn this often while no case finishes, s
 
 Status = Literal["done", "failed", "pending"]
 
@@ -635,16 +636,24 @@ def _is_dask_client(executor: object) -> bool:
     return type(executor).__module__.split(".")[0] == "distributed"
 
 
-def _completed(executor: object, futures: list[Any]) -> Iterator[Any]:
+def _completed(executor: object, futures: list[Any],
+               tick: Callable[[], object] | None = None) -> Iterator[Any]:
     """Futures as they finish: dask's ``as_completed`` for a dask Client, else
-    ``concurrent.futures.as_completed``."""
+    ``concurrent.futures.wait``, calling ``tick`` every :data:`_TICK_S` s while none finishes
+    (so that the progress bar's elapsed time keeps moving through long cases)."""
     if _is_dask_client(executor):
         from distributed import as_completed as dask_as_completed
 
-        return iter(dask_as_completed(futures))
-    from concurrent.futures import as_completed
+        yield from dask_as_completed(futures)
+        return
+    from concurrent.futures import FIRST_COMPLETED, wait
 
-    return as_completed(futures)
+    pending = set(futures)
+    while pending:
+        done, pending = wait(pending, timeout=_TICK_S, return_when=FIRST_COMPLETED)
+        if not done and tick is not None:
+            tick()
+        yield from (f for f in futures if f in done)  # in submission order
 
 
 class Campaign:
@@ -944,7 +953,7 @@ class Campaign:
             with _bar(progress, len(self._cases), done_before) as bar:
                 for k in todo:
                     futures[executor.submit(run_case, self._cases[k].to_dict())] = k
-                for future in _completed(executor, list(futures)):
+                for future in _completed(executor, list(futures), bar.refresh):
                     k = futures[future]
                     try:
                         outcome = future.result()

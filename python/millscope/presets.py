@@ -10,9 +10,11 @@ Scales (:data:`SCALES` says exactly what each changes):
 
 * ``"paper"``: the paper's mill as published.
 * ``"small"``: a 0.05 m axial slice with periodic ends, counts scaled to the slice, every
-  shear modulus x 0.01; for demos (3 simulated seconds of a level-1 case: about 35 s on 2
-  cores).
-* ``"tiny"``: the small slice with every shear modulus x 0.001; for unit tests.
+  shear modulus x 0.01; for quick looks at a case (3 simulated seconds of a level-1 case:
+  about 35 s on 2 cores).
+* ``"tiny"``: the small slice with every shear modulus x 0.001; for the main job
+  (``millscope demo``: LDMS #1-#4 in about 10 minutes of CPU, 5 on 2 free cores) and unit
+  tests.
 * ``"soft"``: the paper's whole mill with every shear modulus x 0.001; for tests of
   whole-mill behaviour (lifter harmonic, mean torque).
 """
@@ -115,16 +117,19 @@ SCALES: Mapping[str, str] = MappingProxyType(
             f"(no end walls); {_SLICE_COUNTS}; every shear modulus x {SMALL_STIFFNESS} "
             f"(Rayleigh time and default dt x {1 / math.sqrt(SMALL_STIFFNESS):.3g}). Drum "
             "diameter, lifters, sphere diameters, densities, Poisson ratios, restitution, "
-            "friction and speeds as at paper scale. For demos: 3 simulated seconds, filling "
-            "and settling included, took about 35 s on 2 cores at load level 1 and about "
-            "3.5 min at level 7."
+            "friction and speeds as at paper scale. For quick looks at a case (notebook 01): "
+            "3 simulated seconds, filling and settling included, took about 35 s on 2 cores "
+            "at load level 1 and about 3.5 min at level 7."
         ),
         "tiny": (
             f"The small slice ({SMALL_LENGTH} m, periodic ends, {_SLICE_COUNTS}) with every "
             f"shear modulus x {TINY_STIFFNESS} (Rayleigh time and default dt "
-            f"x {1 / math.sqrt(TINY_STIFFNESS):.3g}); everything else as at paper scale. For "
-            "unit tests: overlaps reach several % of the radius; 3 simulated seconds took "
-            "about 20 s on 2 cores at load level 1."
+            f"x {1 / math.sqrt(TINY_STIFFNESS):.3g}); everything else as at paper scale. "
+            "Overlaps reach several % of the radius. For the main job (millscope demo: "
+            "LDMS #1-#4, 1036 to 2970 particles, 8 s of rotation each: about 10 minutes of "
+            "CPU, 5 on 2 free cores), the notebooks under test and unit tests. Cost: about "
+            "8 ms of one core per particle and simulated second (LDMS #1-#4 for 14.7 s "
+            "each, settling included: 16 minutes of CPU)."
         ),
         "soft": (
             f"The paper's whole mill and charge unchanged except every shear modulus "
