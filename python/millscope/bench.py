@@ -18,8 +18,8 @@ pass ``--no-cache``, to redo it). The timed stretch starts from the cached state
 thread count and repeat runs the same steps. The steps are counted by the engine's own step
 counter (the torque is sampled on whole steps, so a run takes up to 1 % more steps than
 ``--steps``). The timed runs keep the torque alone, as a campaign does, without booking the
-dissipated energy (``Simulation(track_energy=False)``; LIGGGHTS does not book it either). The last line, ``particle_steps_per_s=<value>``, is the first scene on the most
-threads.
+dissipated energy (``Simulation(track_energy=False)``; LIGGGHTS does not book it either).
+The last line, ``particle_steps_per_s=<value>``, is the first scene on the most threads.
 """
 
 from __future__ import annotations

@@ -425,8 +425,9 @@ class Simulation:
 
         ``threads`` defaults to the thread count of the saved run (needed for a bit-for-bit
         continuation), ``track_energy`` to the saved run's (a run continued without it keeps
-        the same motion; its losses read NaN from then on). A damaged file, a file that is not a checkpoint or one from another
-        millscope version raises :class:`CheckpointError`.
+        the same motion; its losses read NaN from then on). A damaged file, a file that is
+        not a checkpoint or one from another millscope version raises
+        :class:`CheckpointError`.
         """
         path = Path(path)
         try:
