@@ -170,7 +170,7 @@ def campaign_results():
 
 def test_calibration_from_results_takes_the_groups_fit_and_settings(campaign_results,
                                                                     tmp_path) -> None:
-    from millscope.analysis import analyze_campaign
+    from millscope.campaign_analysis import analyze_campaign
 
     cal = ms.Calibration.from_results(campaign_results)
     (group,) = analyze_campaign(campaign_results)

@@ -11,7 +11,7 @@ import re
 import pytest
 
 import millscope as ms
-from millscope.analysis import analyze_campaign, table6_markdown
+from millscope.campaign_analysis import analyze_campaign, table6_markdown
 from millscope.cli import main
 from millscope.report import write_report
 

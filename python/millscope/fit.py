@@ -5,7 +5,8 @@ units of 40 %) with y = a ln(x) + b (Table 6; :mod:`millscope.logfit`, re-export
 :class:`Calibration` stores such a fit with the reference energy that made it per-unit and the
 analysis settings, so that a new record analysed the same way gives a filling estimate
 x = exp((y - b) / a) (:func:`estimate_fill`). :meth:`Calibration.from_results` makes one from a
-campaign's results (:func:`millscope.analysis.analyze_campaign`).
+campaign's results (:func:`millscope.campaign_analysis.analyze_campaign`, imported when
+called: this module stays below the campaign in the layering, DESIGN.md section 1).
 
 Calibration files are JSON, format ``millscope-calibration-2``; files of format 1 (without
 ``band_hz`` and ``block_relative_std``) are read too.
@@ -23,13 +24,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._files import atomic_write, read_json
-from .analysis import GroupAnalysis, analyze_block, analyze_campaign
+from .analysis import analyze_block
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 from .record import TorqueRecord
 from .spectral import RemoveItem, lifter_harmonic_hz
 
 if TYPE_CHECKING:
     from .campaign import CaseResult
+    from .campaign_analysis import GroupAnalysis
 
 __all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit", "Calibration",
            "FillEstimate", "estimate_fill", "OutsideCalibrationWarning"]
@@ -124,11 +126,13 @@ class Calibration:
         Parameters
         ----------
         results : iterable of CaseResult
-            E.g. ``Campaign.run()``; analysed by :func:`~millscope.analysis.analyze_campaign`.
+            E.g. ``Campaign.run()``; analysed by
+            :func:`~millscope.campaign_analysis.analyze_campaign`.
         group : str, optional
             The group's name, e.g. ``"LDMS"``; needed when the results hold several groups.
         bootstrap, confidence, seed, sub_blocks
-            As :func:`~millscope.analysis.analyze_campaign` (the intervals go into ``meta``).
+            As :func:`~millscope.campaign_analysis.analyze_campaign` (the intervals go into
+            ``meta``).
 
         Raises
         ------
@@ -136,6 +140,8 @@ class Calibration:
             when the results hold several groups and none is chosen, or the chosen one is not
             there (the message names the groups); when the group has a single load level.
         """
+        from .campaign_analysis import analyze_campaign  # above fit in the layering
+
         groups = analyze_campaign(results, bootstrap=bootstrap, confidence=confidence,
                                   seed=seed, sub_blocks=sub_blocks)
         names = [g.name for g in groups]

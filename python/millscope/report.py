@@ -1,7 +1,7 @@
 """The report of a campaign store: the paper's section 6 as Markdown with PNG figures.
 
 :func:`write_report` reads a store (:meth:`~millscope.campaign.Campaign.from_store`), analyses
-it (:func:`~millscope.analysis.analyze_campaign`) and writes into one folder:
+it (:func:`~millscope.campaign_analysis.analyze_campaign`) and writes into one folder:
 
 * ``report.md``: the campaign at a glance, the Table 6 analogue (log fits with bootstrap
   intervals), a table per group (per level: mean torque, LTH, energy per unit with its interval),
@@ -30,8 +30,8 @@ from tqdm.auto import tqdm
 
 from . import _core, plots
 from ._files import atomic_write
-from .analysis import GroupAnalysis, analyze_campaign, table6_markdown
 from .campaign import Campaign, CaseResult
+from .campaign_analysis import GroupAnalysis, analyze_campaign, table6_markdown
 from .fit import Calibration
 from .presets import case_key
 from .spectral import spectrum
@@ -169,7 +169,7 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
     block : (float, float), optional
         Block to analyse, s; default: as the store's campaign analysed its cases.
     bootstrap, confidence, seed, sub_blocks
-        As :func:`~millscope.analysis.analyze_campaign`.
+        As :func:`~millscope.campaign_analysis.analyze_campaign`.
 
     Returns
     -------
