@@ -12,6 +12,7 @@ import pytest
 import millscope as ms
 from millscope.cli import main
 from millscope.drivetrain import DriveTrain
+from millscope.fit import NoIntervalWarning
 from millscope.monitoring import monitor_record
 from millscope.synthetic import synthetic_record
 
@@ -101,6 +102,35 @@ def test_cli_prints_one_line_per_window(calibration, tmp_path, capsys) -> None:
         assert float(row[2]) == pytest.approx(w.level, abs=5e-4)
         assert float(row[3]) <= truth(w) <= float(row[4])
         assert row[5] == "ok"
+
+
+def test_a_two_level_calibration_is_warned_about_once_and_printed_without_interval(
+        tmp_path, capsys) -> None:
+    """A fit through levels 1 and 5 gives no interval: one warning for the whole record (not
+    one per window), nan intervals, and on the command line '-' with the warning in the
+    header instead of 'nan'."""
+    with pytest.warns(NoIntervalWarning):
+        cal = ms.Calibration.from_results(case_results(levels=(1, 5), family=22))
+    record = long_record()
+    with pytest.warns(NoIntervalWarning, match="gives no intervals: its log fit goes through 2 "
+                                               "load levels") as caught:
+        windows = ms.monitor(record, cal)
+    assert len(caught) == 1 and caught[0].filename == __file__
+    assert len(windows) == 6
+    assert all(np.isnan(w.interval).all() and np.isfinite(w.level) for w in windows)
+
+    path = cal.save(tmp_path / "cal2.json")
+    csv = record.to_csv(tmp_path / "long.csv")
+    assert main(["monitor", str(csv), "--calibration", str(path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    notes = [line for line in out if line.startswith("# warning: ")]
+    assert len(notes) == 1 and "2 load levels (1 and 5)" in notes[0]
+    rows = [line.split() for line in out if not line.startswith("#")][1:]
+    assert len(rows) == len(windows)
+    for row, w in zip(rows, windows, strict=True):
+        assert float(row[2]) == pytest.approx(w.level, abs=5e-4)
+        assert row[3:5] == ["-", "-"]
+    assert not any("nan" in field for row in rows for field in row)
 
 
 def test_cli_bad_input_is_one_line_and_exit_2(calibration, tmp_path, capsys) -> None:

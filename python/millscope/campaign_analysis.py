@@ -367,11 +367,18 @@ def _with_interval(value: float, interval: tuple[float, float]) -> str:
     return f"{value:.4g} [{interval[0]:.4g}, {interval[1]:.4g}]"
 
 
+def r2_text(fit: LogFit) -> str:
+    """R^2 to 4 decimals, marked when the fit is exact by construction (2 points)."""
+    return f"{fit.r2:.4f}" if fit.n > 2 else f"{fit.r2:.4g} (exact: {fit.n} levels)"
+
+
 def table6_markdown(groups: Sequence[GroupAnalysis]) -> str:
     """The paper's Table 6 for these groups, as a Markdown table (header and one row each).
 
     Columns: the group's code, the fit's equation, R^2, a and b each with its bootstrap
-    interval, the load levels, the cases, and where the intervals come from.
+    interval, the load levels, the cases, and where the intervals come from. A fit through 2
+    levels passes through both exactly: its R^2 of 1 says nothing and reads "1 (exact: 2
+    levels)".
     """
     if not groups:
         raise ValueError("groups is empty; give at least one GroupAnalysis")
@@ -386,7 +393,7 @@ def table6_markdown(groups: Sequence[GroupAnalysis]) -> str:
                         f"{len(g.results)} | {source} |")
             continue
         rows.append(f"| {g.name} | {g.fit.equation()} | "
-                    f"{g.fit.r2:.4f} | {_with_interval(g.fit.a, g.a_interval)} | "
+                    f"{r2_text(g.fit)} | {_with_interval(g.fit.a, g.a_interval)} | "
                     f"{_with_interval(g.fit.b, g.b_interval)} | {_level_range(g.levels)} | "
                     f"{len(g.results)} | {source} |")
     return "\n".join(rows) + "\n"

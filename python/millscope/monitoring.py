@@ -7,6 +7,10 @@ it with an anti-aliasing filter (:func:`~millscope.drivetrain.decimate_record`),
 of a described drive (mill turn, shafts, gear meshes, motor; :mod:`millscope.drivetrain`) are
 removed besides the mean and the LTH. ``python -m millscope monitor`` prints the result, one
 line per window.
+
+A calibration fitted through 2 load levels gives no interval
+(:class:`~millscope.fit.NoIntervalWarning`): the windows' intervals are (nan, nan), warned
+about once per record, not once per window.
 """
 
 from __future__ import annotations
@@ -16,7 +20,13 @@ import warnings
 from dataclasses import dataclass
 
 from .drivetrain import DriveTrain, decimate_record
-from .fit import Calibration, OutsideCalibrationWarning, estimate_fill
+from .fit import (
+    Calibration,
+    NoIntervalWarning,
+    OutsideCalibrationWarning,
+    estimate_fill,
+    no_interval_reason,
+)
 from .record import TorqueRecord
 
 __all__ = ["MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
@@ -33,7 +43,8 @@ class WindowEstimate:
     level : float
         Estimated load level (Table 5 units).
     interval : (float, float)
-        Its prediction interval (:func:`~millscope.estimate_fill`).
+        Its prediction interval (:func:`~millscope.estimate_fill`); (nan, nan) when the
+        calibration gives none.
     energy_pu : float
         The window's spectral energy per unit of the calibration's reference.
     outside : bool
@@ -111,12 +122,25 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
         One :class:`WindowEstimate` per window, in time order. Estimates outside the
         calibrated range are flagged (``outside``), not warned about one by one.
 
+    Warns
+    -----
+    NoIntervalWarning
+        once, when the calibration cannot give intervals (a fit through 2 levels).
+
     Raises
     ------
     ValueError
         for a bad argument (naming it, its value and the valid range) or a record shorter
         than one window, before any window is analysed.
     """
+    return _monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
+                           confidence=confidence, stacklevel=3)
+
+
+def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s: float | None,
+                    step_s: float | None, drive: DriveTrain | None, confidence: float,
+                    stacklevel: int) -> MonitorResult:
+    """:func:`monitor_record`, its warnings pointing ``stacklevel`` frames up."""
     cal = calibration
     if not isinstance(cal, Calibration):
         raise ValueError(f"calibration = {cal!r} is not valid; it must be a Calibration")
@@ -141,12 +165,18 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
     nyquist = 0.5 * analysed.sample_rate_hz
     band = nyquist if cal.band_hz is None else min(cal.band_hz, nyquist)
     lines = () if drive is None else tuple(drive.frequencies_hz(max_hz=band, include_lth=False))
+    if not cal.gives_intervals:
+        label = f" {cal.label}" if cal.label else ""
+        warnings.warn(f"the calibration{label} gives no intervals: "
+                      f"{no_interval_reason(cal.fit)}; every window's interval is (nan, nan)",
+                      NoIntervalWarning, stacklevel=stacklevel)
     t, x = analysed.time_s, analysed.torque_Nm
     windows = []
     for start in range(0, len(analysed) - width + 1, step):
         block = TorqueRecord(t[start:start + width], x[start:start + width])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", OutsideCalibrationWarning)
+            warnings.simplefilter("ignore", NoIntervalWarning)  # warned once above
             est = estimate_fill(block, cal, confidence=confidence, lines_hz=lines)
         windows.append(WindowEstimate(float(t[start]), float(t[start] + width * dt), est.level,
                                       est.interval, est.energy_pu, est.outside))
@@ -161,5 +191,5 @@ def monitor(record: TorqueRecord, calibration: Calibration, *, window_s: float |
             confidence: float = 0.95) -> list[WindowEstimate]:
     """The filling estimate of every window of a long record: :func:`monitor_record`'s
     windows (same parameters)."""
-    return monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
-                          confidence=confidence).windows
+    return _monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
+                           confidence=confidence, stacklevel=3).windows

@@ -10,7 +10,10 @@ it (:func:`~millscope.campaign_analysis.analyze_campaign`) and writes into one f
   (the spectra of a group with the LTH marked), ``fig11_lth.png`` (LTH amplitude against
   filling), ``fig12_waterfall_<group>.png`` (Figs. 12-13, a waterfall per group),
   ``fig14_energy.png`` (energy per unit against filling), ``fig15_fits.png`` (the log fits);
-* ``calibration_<group>.json``: a :class:`~millscope.Calibration` per group with a fit.
+* ``calibration_<group>.json``: a :class:`~millscope.Calibration` per group with a fit through
+  at least 3 load levels. A group with 2 levels gets none, and its section says why: the fit
+  is exact (R^2 = 1 trivially) and could give a filling estimate no interval
+  (:class:`~millscope.fit.NoIntervalWarning`); Table 6 marks such fits "exact".
 
 ``python -m millscope report STORE [--out DIR]`` runs it. Every file is written atomically.
 """
@@ -31,8 +34,8 @@ from tqdm.auto import tqdm
 from . import _core, plots
 from ._files import atomic_write
 from .campaign import Campaign, CaseResult
-from .campaign_analysis import GroupAnalysis, analyze_campaign, table6_markdown
-from .fit import Calibration
+from .campaign_analysis import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
+from .fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from .presets import case_key
 from .spectral import spectrum
 
@@ -204,7 +207,7 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
         written.append(fig)
     calibrations: dict[str, str] = {}
     for g in groups:
-        if g.fit is not None:
+        if g.fit is not None and g.fit.n >= MIN_LEVELS_FOR_INTERVALS:
             name = f"calibration_{_slug(g.name)}.json"
             Calibration.from_group(g).save(target / name)
             calibrations[g.name] = name
@@ -254,10 +257,13 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
                   f"Particles: {g.particles}; {speed}{g.rotation_hz:.4f} Hz, {g.lifters} lifters "
                   f"(LTH expected at {g.lifters * g.rotation_hz:.3f} Hz).", ""]
         if g.fit is not None:
-            lines += [f"Fit: {g.fit.equation()}, R² = {g.fit.r2:.4f}.", ""]
+            lines += [f"Fit: {g.fit.equation()}, R² = {r2_text(g.fit)}.", ""]
         lines += _group_table(g) + [""]
         if g.name in calibrations:
             lines += [f"Calibration: [`{calibrations[g.name]}`]({calibrations[g.name]}).", ""]
+        elif g.fit is not None:
+            lines += [f"No calibration file: {no_interval_reason(g.fit)}, so the filling "
+                      "estimates it gave would have no interval.", ""]
     if written:
         lines += ["## Figures", ""]
         for fig in written:
