@@ -128,7 +128,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:  # printed with the header below
         warnings.simplefilter("always")
         result = monitor_record(record, calibration, step_s=args.step, drive=drive,
-                                confidence=args.confidence)
+                                confidence=args.confidence, band_hz=args.band_hz)
     fit = calibration.fit
     label = f"{calibration.label} " if calibration.label else ""
     decimated = ("" if result.decimated_from_hz is None else
@@ -248,6 +248,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="step between windows, s (default: the window length)")
     p.add_argument("--confidence", type=_confidence, default=0.95,
                    help="confidence of the intervals, in (0, 1) (default 0.95)")
+    p.add_argument("--band-hz", type=_positive_float, default=None,
+                   help="analysis band 0..BAND_HZ, Hz, for a calibration that does not give "
+                        "one (format 1): the Nyquist frequency of its records (50 for 10 ms "
+                        "samples); default: the calibration's")
     p.set_defaults(func=cmd_monitor)
 
     p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",

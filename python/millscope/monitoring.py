@@ -8,6 +8,12 @@ of a described drive (mill turn, shafts, gear meshes, motor; :mod:`millscope.dri
 removed besides the mean and the LTH. ``python -m millscope monitor`` prints the result, one
 line per window.
 
+A calibration of format 1 does not say up to which frequency its energies were counted
+(``band_hz`` None): a fast record could then be neither decimated nor band-limited, and its
+energy would count content the calibration's records never had. Give the band
+(``band_hz=``, ``--band-hz``); without it the monitor warns (:class:`MissingBandWarning`) and
+counts up to the record's Nyquist frequency.
+
 A calibration fitted through 2 load levels gives no interval
 (:class:`~millscope.fit.NoIntervalWarning`): the windows' intervals are (nan, nan), warned
 about once per record, not once per window.
@@ -15,6 +21,7 @@ about once per record, not once per window.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -29,7 +36,12 @@ from .fit import (
 )
 from .record import TorqueRecord
 
-__all__ = ["MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
+__all__ = ["MissingBandWarning", "MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
+
+
+class MissingBandWarning(UserWarning):
+    """The calibration does not give its band (format 1) and none was passed: the record is
+    counted up to its own Nyquist frequency, without decimation."""
 
 
 @dataclass(frozen=True)
@@ -97,7 +109,8 @@ def _length(name: str, value: float, dt: float) -> int:
 
 def monitor_record(record: TorqueRecord, calibration: Calibration, *,
                    window_s: float | None = None, step_s: float | None = None,
-                   drive: DriveTrain | None = None, confidence: float = 0.95) -> MonitorResult:
+                   drive: DriveTrain | None = None, confidence: float = 0.95,
+                   band_hz: float | None = None) -> MonitorResult:
     """Estimate the load level in consecutive windows of a long record.
 
     Parameters
@@ -115,6 +128,11 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
         which is located and removed anyway). Its lifter count must be the calibration's.
     confidence : float
         Of the intervals, in (0, 1).
+    band_hz : float, optional
+        Top of the band to count, Hz, for a calibration that does not give one (format 1):
+        the Nyquist frequency of the records it was made from (50 Hz for 10 ms samples).
+        The record is decimated to it as for a format-2 calibration. A calibration with a
+        band takes only its own (or None).
 
     Returns
     -------
@@ -126,6 +144,10 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
     -----
     NoIntervalWarning
         once, when the calibration cannot give intervals (a fit through 2 levels).
+    MissingBandWarning
+        when neither the calibration nor ``band_hz`` gives the band: the record is then
+        neither decimated nor band-limited, and a record sampled faster than the
+        calibration's gives biased levels.
 
     Raises
     ------
@@ -134,16 +156,31 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
         than one window, before any window is analysed.
     """
     return _monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
-                           confidence=confidence, stacklevel=3)
+                           confidence=confidence, band_hz=band_hz, stacklevel=3)
+
+
+def _with_band(cal: Calibration, band_hz: float | None) -> Calibration:
+    """The calibration with ``band_hz`` filled in where it gives none."""
+    if band_hz is None:
+        return cal
+    if not (isinstance(band_hz, (int, float)) and math.isfinite(band_hz) and band_hz > 0):
+        raise ValueError(f"band_hz = {band_hz!r} is not valid; it must be > 0 Hz")
+    if cal.band_hz is None:
+        return dataclasses.replace(cal, band_hz=float(band_hz))
+    if not math.isclose(band_hz, cal.band_hz, rel_tol=1e-9):
+        raise ValueError(f"band_hz = {band_hz!r} is not valid; the calibration counts energy up "
+                         f"to its own band_hz = {cal.band_hz:g} Hz, and only that band compares")
+    return cal
 
 
 def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s: float | None,
                     step_s: float | None, drive: DriveTrain | None, confidence: float,
-                    stacklevel: int) -> MonitorResult:
+                    band_hz: float | None, stacklevel: int) -> MonitorResult:
     """:func:`monitor_record`, its warnings pointing ``stacklevel`` frames up."""
     cal = calibration
     if not isinstance(cal, Calibration):
         raise ValueError(f"calibration = {cal!r} is not valid; it must be a Calibration")
+    cal = _with_band(cal, band_hz)
     if window_s is None:
         window_s = cal.block_s
     elif not (isinstance(window_s, (int, float)) and abs(window_s - cal.block_s) <= record.dt):
@@ -170,6 +207,15 @@ def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s:
         warnings.warn(f"the calibration{label} gives no intervals: "
                       f"{no_interval_reason(cal.fit)}; every window's interval is (nan, nan)",
                       NoIntervalWarning, stacklevel=stacklevel)
+    if cal.band_hz is None:
+        label = f" {cal.label}" if cal.label else ""
+        warnings.warn(f"the calibration{label} has no band_hz (a format-1 file) and no band_hz "
+                      f"was given: the {record.sample_rate_hz:g} Hz record is neither decimated "
+                      f"nor band-limited, its energy counted up to {nyquist:g} Hz; if the "
+                      "calibration's records were sampled slower, the levels are biased. Pass "
+                      "band_hz= (command line --band-hz), the Nyquist frequency of the "
+                      "calibration's records (50 Hz for 10 ms samples)", MissingBandWarning,
+                      stacklevel=stacklevel)
     t, x = analysed.time_s, analysed.torque_Nm
     windows = []
     for start in range(0, len(analysed) - width + 1, step):
@@ -188,8 +234,8 @@ def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s:
 
 def monitor(record: TorqueRecord, calibration: Calibration, *, window_s: float | None = None,
             step_s: float | None = None, drive: DriveTrain | None = None,
-            confidence: float = 0.95) -> list[WindowEstimate]:
+            confidence: float = 0.95, band_hz: float | None = None) -> list[WindowEstimate]:
     """The filling estimate of every window of a long record: :func:`monitor_record`'s
     windows (same parameters)."""
     return _monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
-                           confidence=confidence, stacklevel=3).windows
+                           confidence=confidence, band_hz=band_hz, stacklevel=3).windows
