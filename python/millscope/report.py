@@ -86,7 +86,10 @@ def _spectra(group: GroupAnalysis) -> tuple[list, list[str], list[float | None]]
 def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
     figs = [_Figure("fig09_torque.png", "Fig. 9: average torque",
                     "Mean torque over the block per unit of each group's largest, against the "
-                    "load level (mean over the repeats of a level).",
+                    "load level (mean over the repeats of a level). The axis starts at "
+                    f"{plots.TORQUE_PU_FLOOR:g} per unit, not at the smallest value, so the "
+                    "change with filling shows at its true size; the legend gives the largest "
+                    "change within a group.",
                     lambda: plots.plot_torque_levels(
                         {g.name: (g.levels, g.torque_pu) for g in groups}))]
     for g in groups:
