@@ -91,6 +91,20 @@ def test_demo_report_agrees_with_the_stored_records(demo: tuple[Path, DemoResult
     assert "tiny" in text and "Leave-one-out" in text
 
 
+def test_leave_one_out_of_3_levels_says_its_2_level_fits_give_no_interval(
+        demo: tuple[Path, DemoResult]) -> None:
+    """Each calibration left after holding one of 3 levels out goes through the other 2: an
+    exact fit with no residual, so no interval; the report's rows say so, not 'nan'."""
+    out, result = demo
+    text = (out / "report.md").read_text()
+    rows = re.findall(r"^\| (\d) \| [0-9.]+ \| ([^|]+) \| (?:yes|no) \|$", text, re.M)
+    levels = sorted({int(r.scene.name.split("#")[1]) for r in result.results})
+    assert [int(level) for level, _ in rows] == levels
+    assert all(interval == f"none (fit through {len(levels) - 1} levels)"
+               for _, interval in rows)
+    assert "each calibration left is fitted through 2" in text
+
+
 def test_a_rerun_reuses_the_store(demo: tuple[Path, DemoResult]) -> None:
     out, first = demo
     again = run_demo(out, QUICK, progress=False)

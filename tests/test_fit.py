@@ -11,7 +11,12 @@ import pytest
 from scipy import stats
 
 import millscope as ms
-from millscope.fit import OutsideCalibrationWarning, log_fit_coefficients, per_unit
+from millscope.fit import (
+    NoIntervalWarning,
+    OutsideCalibrationWarning,
+    log_fit_coefficients,
+    per_unit,
+)
 from millscope.synthetic import SyntheticTorque, synthetic_record
 
 
@@ -170,7 +175,7 @@ def campaign_results():
 
 def test_calibration_from_results_takes_the_groups_fit_and_settings(campaign_results,
                                                                     tmp_path) -> None:
-    from millscope.analysis import analyze_campaign
+    from millscope.campaign_analysis import analyze_campaign
 
     cal = ms.Calibration.from_results(campaign_results)
     (group,) = analyze_campaign(campaign_results)
@@ -194,10 +199,42 @@ def test_calibration_from_results_chooses_among_groups(campaign_results) -> None
         ms.Calibration.from_results(both)
     with pytest.raises(ValueError, match="group = 'LDLS' is not among .*: LDMS, HDHS"):
         ms.Calibration.from_results(both, group="LDLS")
-    assert ms.Calibration.from_results(both, group="HDHS").label == "HDHS"
+    with pytest.warns(NoIntervalWarning):  # HDHS has 2 levels
+        assert ms.Calibration.from_results(both, group="HDHS").label == "HDHS"
     single = case_results(levels=(2,))
     with pytest.raises(ValueError, match="single load level"):
         ms.Calibration.from_results(single)
+
+
+def test_a_two_level_calibration_warns_and_so_does_each_estimate_without_interval() -> None:
+    """Through 2 levels the fit is exact (R^2 = 1 against scipy's r of +-1) with no residual
+    left: the calibration is made with a warning, and an estimate from it warns that its
+    interval is nan. The same group with a third level gives intervals and no warning."""
+    from .synthetic_campaign import LAW, case_results, content_for
+
+    two = case_results(levels=(1, 3), family=12)
+    with pytest.warns(NoIntervalWarning, match=r"group LDMS: its log fit goes through 2 load "
+                                               r"levels \(1 and 3\) exactly") as caught:
+        cal = ms.Calibration.from_results(two)
+    assert caught[0].filename == __file__  # points at the caller
+    energies = [r.energy for r in two]
+    ref = stats.linregress(np.log([1, 3]), np.asarray(energies) / max(energies))
+    assert cal.fit.r2 == pytest.approx(ref.rvalue**2, abs=1e-12)
+    assert not cal.gives_intervals
+    (group,) = ms.analyze_campaign(two)
+    with pytest.warns(NoIntervalWarning):  # repr: nan standard errors, and nan != nan
+        assert repr(ms.Calibration.from_group(group)) == repr(cal)
+    rec = synthetic_record(2, content=content_for(two[0].scene, LAW), seed=77).block(4, 14)
+    with pytest.warns(NoIntervalWarning, match="no interval for the estimate: the calibration "
+                                               "LDMS cannot give one") as caught:
+        est = ms.estimate_fill(rec, cal)
+    assert caught[0].filename == __file__
+    assert math.isfinite(est.level) and np.isnan(est.interval).all()
+
+    three = ms.Calibration.from_results(two + case_results(levels=(5,), family=12))  # silent
+    assert three.gives_intervals
+    est = ms.estimate_fill(rec, three)
+    assert est.interval[0] < est.level < est.interval[1]
 
 
 @pytest.mark.parametrize("level", [1.5, 2.5, 4.0, 6.0])

@@ -3,6 +3,7 @@ measured-like (1 kHz, drive-train lines), from Python and from the command line.
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 
@@ -12,7 +13,8 @@ import pytest
 import millscope as ms
 from millscope.cli import main
 from millscope.drivetrain import DriveTrain
-from millscope.monitoring import monitor_record
+from millscope.fit import NoIntervalWarning
+from millscope.monitoring import MissingBandWarning, monitor_record
 from millscope.synthetic import synthetic_record
 
 from .synthetic_campaign import LAW, case_results, content_for
@@ -101,6 +103,87 @@ def test_cli_prints_one_line_per_window(calibration, tmp_path, capsys) -> None:
         assert float(row[2]) == pytest.approx(w.level, abs=5e-4)
         assert float(row[3]) <= truth(w) <= float(row[4])
         assert row[5] == "ok"
+
+
+def _format_1(calibration: ms.Calibration, path) -> ms.Calibration:
+    """The calibration as a format-1 file holds it: without band_hz and block_relative_std."""
+    data = json.loads(calibration.save(path).read_text())
+    data["format"] = "millscope-calibration-1"
+    del data["band_hz"], data["block_relative_std"]
+    path.write_text(json.dumps(data))
+    return ms.Calibration.load(path)
+
+
+def test_a_calibration_without_band_warns_and_takes_one_given(calibration, tmp_path,
+                                                              capsys) -> None:
+    """A format-1 calibration does not say its band. A 1 kHz record with the density of the
+    100 Hz records in 0-50 Hz: counted up to 500 Hz it reads ten times the energy and every
+    window falls below the calibrated range; told band_hz=50 it is decimated and reads as with
+    the format-2 calibration (same fit and reference; the intervals differ, format 1 has no
+    block_relative_std)."""
+    old = _format_1(calibration, tmp_path / "old.json")
+    assert old.band_hz is None and calibration.band_hz == pytest.approx(50.0)
+    record = long_record(sample_rate_hz=1000.0, noise_scale=np.sqrt(10.0))
+    with pytest.warns(MissingBandWarning, match=r"has no band_hz \(a format-1 file\).*the 1000 "
+                                                "Hz record is neither decimated nor "
+                                                "band-limited") as caught:
+        unbounded = ms.monitor(record, old)
+    assert len(caught) == 1 and caught[0].filename == __file__
+    assert all(w.outside and w.level < 1.0 for w in unbounded)
+
+    given = monitor_record(record, old, band_hz=50.0)  # no warning (warnings are errors)
+    reference = monitor_record(record, calibration)
+    assert given.sample_rate_hz == reference.sample_rate_hz == pytest.approx(125.0)
+    assert [w.level for w in given.windows] == [w.level for w in reference.windows]
+    for w in given.windows:
+        assert w.interval[0] <= truth(w) <= w.interval[1]
+    with pytest.raises(ValueError, match="band_hz = 20.0 is not valid; the calibration counts "
+                                         "energy up to its own band_hz = 50 Hz"):
+        ms.monitor(record, calibration, band_hz=20.0)
+    with pytest.raises(ValueError, match="band_hz = -1 is not valid"):
+        ms.monitor(record, old, band_hz=-1)
+
+    csv = record.to_csv(tmp_path / "fast.csv")
+    assert main(["monitor", str(csv), "--calibration", str(tmp_path / "old.json")]) == 0
+    notes = [line for line in capsys.readouterr().out.splitlines()
+             if line.startswith("# warning: ")]
+    assert len(notes) == 1 and "no band_hz" in notes[0] and "--band-hz" in notes[0]
+    assert main(["monitor", str(csv), "--calibration", str(tmp_path / "old.json"),
+                 "--band-hz", "50"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert not any(line.startswith("# warning") for line in out)
+    rows = [line.split() for line in out if not line.startswith("#")][1:]
+    assert [float(r[2]) for r in rows] == pytest.approx([w.level for w in reference.windows],
+                                                        abs=5e-4)
+
+
+def test_a_two_level_calibration_is_warned_about_once_and_printed_without_interval(
+        tmp_path, capsys) -> None:
+    """A fit through levels 1 and 5 gives no interval: one warning for the whole record (not
+    one per window), nan intervals, and on the command line '-' with the warning in the
+    header instead of 'nan'."""
+    with pytest.warns(NoIntervalWarning):
+        cal = ms.Calibration.from_results(case_results(levels=(1, 5), family=22))
+    record = long_record()
+    with pytest.warns(NoIntervalWarning, match="gives no intervals: its log fit goes through 2 "
+                                               "load levels") as caught:
+        windows = ms.monitor(record, cal)
+    assert len(caught) == 1 and caught[0].filename == __file__
+    assert len(windows) == 6
+    assert all(np.isnan(w.interval).all() and np.isfinite(w.level) for w in windows)
+
+    path = cal.save(tmp_path / "cal2.json")
+    csv = record.to_csv(tmp_path / "long.csv")
+    assert main(["monitor", str(csv), "--calibration", str(path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    notes = [line for line in out if line.startswith("# warning: ")]
+    assert len(notes) == 1 and "2 load levels (1 and 5)" in notes[0]
+    rows = [line.split() for line in out if not line.startswith("#")][1:]
+    assert len(rows) == len(windows)
+    for row, w in zip(rows, windows, strict=True):
+        assert float(row[2]) == pytest.approx(w.level, abs=5e-4)
+        assert row[3:5] == ["-", "-"]
+    assert not any("nan" in field for row in rows for field in row)
 
 
 def test_cli_bad_input_is_one_line_and_exit_2(calibration, tmp_path, capsys) -> None:

@@ -214,6 +214,31 @@ def test_level_plots_draw_each_group_in_level_order() -> None:
         plots.plot_torque_levels({"x": (levels, torque, np.zeros((2, 3)))})
 
 
+def test_torque_level_plot_shows_a_small_change_at_its_true_scale() -> None:
+    """Fig. 9: torques within 0.4 % of each other. The y axis runs from 0.9 per unit (or
+    below the smallest value) to above 1, so the change takes a few per cent of the height
+    rather than all of it; the legend states the largest change, (max - min) / max."""
+    levels = np.arange(1.0, 8.0)
+    ldms = 1.0 - 0.004 * (levels - 1) / 6  # falls by 0.4 % from level 1 to 7
+    hdms = np.array([0.999, 1.0, 0.9995, 0.999, 0.9985, 0.998, 0.9975])
+    (ax,) = plots.plot_torque_levels({"LDMS": (levels, ldms), "HDMS": (levels, hdms)}).axes
+    low, high = ax.get_ylim()
+    assert low <= 0.9 and high >= 1.0
+    assert (ldms.max() - ldms.min()) / (high - low) < 0.05
+    change = (ldms.max() - ldms.min()) / ldms.max()
+    assert ax.get_legend().get_title().get_text() == (
+        f"largest change within a group: {100 * change:.2g} % (LDMS)")
+    # a value below the floor widens the axis to hold it
+    (ax,) = plots.plot_torque_levels({"x": (levels[:3], np.array([1.0, 0.85, 0.95]))}).axes
+    assert ax.get_ylim()[0] < 0.85 and ax.get_ylim()[1] >= 1.0
+    # floor=None autoscales: the 0.4 % change fills the axis, as before
+    (ax,) = plots.plot_torque_levels({"LDMS": (levels, ldms)}, floor=None).axes
+    low, high = ax.get_ylim()
+    assert (ldms.max() - ldms.min()) / (high - low) > 0.5
+    with pytest.raises(ValueError, match="floor = 1.2 is not valid"):
+        plots.plot_torque_levels({"LDMS": (levels, ldms)}, floor=1.2)
+
+
 def test_energy_level_plot_draws_intervals_clipped_at_the_point() -> None:
     y = ENERGY
     bounds = np.vstack([y - 0.05, y + 0.02])

@@ -11,8 +11,10 @@ import re
 import pytest
 
 import millscope as ms
-from millscope.analysis import analyze_campaign, table6_markdown
+from millscope.campaign_analysis import analyze_campaign, table6_markdown
 from millscope.cli import main
+from millscope.fit import NoIntervalWarning
+from millscope.presets import case_key
 from millscope.report import write_report
 
 from .synthetic_campaign import synthetic_store
@@ -65,15 +67,35 @@ def test_the_report_holds_table_6_and_every_figure(store, report) -> None:
     assert "balls-MS" in text
 
 
-def test_each_group_gets_its_calibration(store, report) -> None:
+def test_each_group_with_3_levels_gets_its_calibration(store, report) -> None:
     results = ms.Campaign.from_store(store).results()
-    for name in ("LDMS", "HDHS"):
-        path = report.parent / f"calibration_{name}.json"
-        assert f"({path.name})" in report.read_text()
-        cal = ms.Calibration.load(path)
-        # repr: a fit through 2 levels has nan standard errors, and nan != nan
-        assert repr(cal) == repr(ms.Calibration.from_results(results, group=name, bootstrap=300))
-        assert json.loads(path.read_text())["format"] == "millscope-calibration-2"
+    path = report.parent / "calibration_LDMS.json"
+    assert f"({path.name})" in report.read_text()
+    cal = ms.Calibration.load(path)
+    assert cal.gives_intervals
+    assert cal == ms.Calibration.from_results(results, group="LDMS", bootstrap=300)
+    assert json.loads(path.read_text())["format"] == "millscope-calibration-2"
+
+
+def test_a_two_level_group_gets_no_calibration_and_its_exact_fit_is_marked(store,
+                                                                          report) -> None:
+    """HDHS finished at levels 1 and 3 only (level 5 failed): its fit passes through both
+    points, R^2 = 1 says nothing, and a calibration from it could give no interval."""
+    results = ms.Campaign.from_store(store).results()
+    hdhs_levels = {case_key(r.scene).load_level for r in results
+                   if r.status == "done" and r.scene.name.startswith("HDHS")}
+    assert hdhs_levels == {1, 3}
+    text = report.read_text()
+    assert not (report.parent / "calibration_HDHS.json").exists()
+    section = text.split("## HDHS")[1].split("\n## ")[0]
+    assert "No calibration file: its log fit goes through 2 load levels (1 and 3)" in section
+    assert "R² = 1 (exact: 2 levels)" in section
+    row = next(line for line in text.splitlines() if line.startswith("| HDHS | y = "))
+    assert row.split(" | ")[2] == "1 (exact: 2 levels)"
+    ldms = next(line for line in text.splitlines() if line.startswith("| LDMS | y = "))
+    assert "exact" not in ldms
+    with pytest.warns(NoIntervalWarning):  # what the report declined to write
+        assert not ms.Calibration.from_results(results, group="HDHS").gives_intervals
 
 
 def test_write_report_defaults_to_a_folder_in_the_store(store, report, monkeypatch) -> None:

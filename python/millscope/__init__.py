@@ -8,8 +8,8 @@ from typing import Any as _Any
 
 from . import campaign, contact, drivetrain, presets
 from ._core import build_info as _build_info
-from .analysis import GroupAnalysis, analyze_campaign
 from .campaign import Campaign, Case, CaseResult, RunSettings
+from .campaign_analysis import GroupAnalysis, analyze_campaign
 from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
 from .monitoring import WindowEstimate, monitor
 from .record import RecordError, TorqueRecord

@@ -14,7 +14,7 @@ sqrt(n/(n - 1)); and it is done on the log scale, so that energies stay positive
   assumption that they share their relative spread, and each mean draws its resample from the
   pool. With 2 repeats at each of 7 levels, the 95 % intervals of a and b held the truth about
   80 % of the time when each level resampled its own 2 values, and about 91 % when drawing
-  from the pool of 14 (tests/test_analysis.py): the pool's spread is still estimated from 7
+  from the pool of 14 (tests/test_campaign_analysis.py): the pool's spread is still estimated from 7
   degrees of freedom, which a percentile interval does not allow for.
 """
 

@@ -10,7 +10,9 @@ Bad input ends with one line ``millscope: error: ...`` on stderr and exit code 2
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -123,8 +125,10 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     calibration = Calibration.load(args.calibration)
     drive = None if args.drive is None else DriveTrain.load(args.drive)
     record = TorqueRecord.load(args.file)
-    result = monitor_record(record, calibration, step_s=args.step, drive=drive,
-                            confidence=args.confidence)
+    with warnings.catch_warnings(record=True) as caught:  # printed with the header below
+        warnings.simplefilter("always")
+        result = monitor_record(record, calibration, step_s=args.step, drive=drive,
+                                confidence=args.confidence, band_hz=args.band_hz)
     fit = calibration.fit
     label = f"{calibration.label} " if calibration.label else ""
     decimated = ("" if result.decimated_from_hz is None else
@@ -138,13 +142,15 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     print(f"# windows of {result.window_s:g} s every {result.step_s:g} s: "
           f"{len(result.windows)}; removed: mean, LTH near "
           f"{calibration.lifters * calibration.rotation_hz:.3f} Hz, drive lines {lines} Hz")
+    for w in caught:
+        print(f"# warning: {w.message}")
     percent = f"{100 * args.confidence:g}"
     print(f"{'start_s':>9} {'end_s':>9} {'level':>8} {'low_' + percent:>8} "
           f"{'high_' + percent:>8}  flag")
     for w in result.windows:
         flag = "outside" if w.outside else "ok"
-        print(f"{w.start_s:9.2f} {w.end_s:9.2f} {w.level:8.3f} {w.interval[0]:8.3f} "
-              f"{w.interval[1]:8.3f}  {flag}")
+        low, high = (f"{v:8.3f}" if math.isfinite(v) else f"{'-':>8}" for v in w.interval)
+        print(f"{w.start_s:9.2f} {w.end_s:9.2f} {w.level:8.3f} {low} {high}  {flag}")
     return 0
 
 
@@ -242,6 +248,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="step between windows, s (default: the window length)")
     p.add_argument("--confidence", type=_confidence, default=0.95,
                    help="confidence of the intervals, in (0, 1) (default 0.95)")
+    p.add_argument("--band-hz", type=_positive_float, default=None,
+                   help="analysis band 0..BAND_HZ, Hz, for a calibration that does not give "
+                        "one (format 1): the Nyquist frequency of its records (50 for 10 ms "
+                        "samples); default: the calibration's")
     p.set_defaults(func=cmd_monitor)
 
     p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",

@@ -34,8 +34,10 @@ from ._files import atomic_write
 from .analysis import analyze_block
 from .campaign import Campaign, CaseResult, RunSettings
 from .fit import (
+    MIN_LEVELS_FOR_INTERVALS,
     Calibration,
     LogFit,
+    NoIntervalWarning,
     OutsideCalibrationWarning,
     estimate_fill,
     log_fit,
@@ -362,7 +364,8 @@ def _leave_one_out(rows: Sequence[_Row], levels: np.ndarray, energies: np.ndarra
                    lifters: int, rotation_hz: float, block_s: float
                    ) -> list[tuple[float, tuple[float, float], bool]]:
     """For each level, the filling estimated from a calibration made without that level:
-    (level, 95 % interval, outside the calibrated range). Empty with fewer than 3 levels."""
+    (level, 95 % interval, outside the calibrated range). Empty with fewer than 3 levels; with
+    3, every calibration left goes through 2 levels and the intervals are nan."""
     if len(rows) < 3:
         return []
     out = []
@@ -374,6 +377,9 @@ def _leave_one_out(rows: Sequence[_Row], levels: np.ndarray, energies: np.ndarra
                           block_s=block_s)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", OutsideCalibrationWarning)
+            # with 3 levels each calibration left goes through 2 and gives no interval: the
+            # report says so in the row instead of warning
+            warnings.simplefilter("ignore", NoIntervalWarning)
             try:
                 est = estimate_fill(row.block, cal)
             except (ValueError, FloatingPointError):
@@ -454,8 +460,13 @@ def _report_markdown(plan: DemoPlan, rows: Sequence[_Row], energies: np.ndarray,
             "|---|---|---|---|",
         ]
         for row, (est, (lo, hi), outside) in zip(rows, held_out, strict=True):
-            lines.append(f"| {row.level} | {est:.2f} | {lo:.2f} .. {hi:.2f} | "
+            interval = (f"{lo:.2f} .. {hi:.2f}" if math.isfinite(lo) and math.isfinite(hi)
+                        else f"none (fit through {len(rows) - 1} levels)")
+            lines.append(f"| {row.level} | {est:.2f} | {interval} | "
                          f"{'yes' if outside else 'no'} |")
+        if len(rows) - 1 < MIN_LEVELS_FOR_INTERVALS:
+            lines += ["", f"With {len(rows)} levels, each calibration left is fitted through "
+                      f"{len(rows) - 1}: exactly (R² = 1 trivially), so it gives no interval."]
     lines += ["", "## Figures", ""]
     lines += [f"![{name}]({name})" for name in written if name.endswith(".png")]
     lines += ["", "Files: " + ", ".join(f"`{name}`" for name in written)

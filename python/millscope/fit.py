@@ -5,7 +5,15 @@ units of 40 %) with y = a ln(x) + b (Table 6; :mod:`millscope.logfit`, re-export
 :class:`Calibration` stores such a fit with the reference energy that made it per-unit and the
 analysis settings, so that a new record analysed the same way gives a filling estimate
 x = exp((y - b) / a) (:func:`estimate_fill`). :meth:`Calibration.from_results` makes one from a
-campaign's results (:func:`millscope.analysis.analyze_campaign`).
+campaign's results (:func:`millscope.campaign_analysis.analyze_campaign`, imported when
+called: this module stays below the campaign in the layering, DESIGN.md section 1).
+
+A fit through 2 load levels is exact (R^2 = 1 trivially) and leaves no residual to estimate
+the scatter from, so its estimates can have no interval. Such calibrations are allowed (the
+point estimate is still defined) but never silently: :meth:`Calibration.from_results` and
+:meth:`Calibration.from_group` warn with :class:`NoIntervalWarning`, and so does
+:func:`estimate_fill` whenever it returns a nan interval. Calibrate with at least
+``MIN_LEVELS_FOR_INTERVALS`` (3) levels.
 
 Calibration files are JSON, format ``millscope-calibration-2``; files of format 1 (without
 ``band_hz`` and ``block_relative_std``) are read too.
@@ -23,23 +31,39 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._files import atomic_write, read_json
-from .analysis import GroupAnalysis, analyze_block, analyze_campaign
+from .analysis import analyze_block
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 from .record import TorqueRecord
 from .spectral import RemoveItem, lifter_harmonic_hz
 
 if TYPE_CHECKING:
     from .campaign import CaseResult
+    from .campaign_analysis import GroupAnalysis
 
 __all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit", "Calibration",
-           "FillEstimate", "estimate_fill", "OutsideCalibrationWarning"]
+           "FillEstimate", "estimate_fill", "OutsideCalibrationWarning", "NoIntervalWarning",
+           "MIN_LEVELS_FOR_INTERVALS"]
 
 CALIBRATION_FORMAT = "millscope-calibration-2"
 READABLE_FORMATS = ("millscope-calibration-1", CALIBRATION_FORMAT)
+#: A fit through fewer load levels is exact and gives its estimates no interval.
+MIN_LEVELS_FOR_INTERVALS = 3
 
 
 class OutsideCalibrationWarning(UserWarning):
     """A filling estimate lies outside the range of levels the calibration was made from."""
+
+
+class NoIntervalWarning(UserWarning):
+    """A calibration cannot give its filling estimates an interval: its fit goes through fewer
+    than 3 load levels (exact, R^2 = 1 trivially, no residual scatter)."""
+
+
+def no_interval_reason(fit: LogFit) -> str:
+    """Why a fit gives estimates no interval (for warnings and reports)."""
+    return (f"its log fit goes through {fit.n} load levels ({fit.x_min:g} and {fit.x_max:g}) "
+            f"exactly (R^2 = 1 trivially) and leaves no residual scatter; a calibration needs "
+            f"at least {MIN_LEVELS_FOR_INTERVALS} levels for a prediction interval")
 
 
 def _plain(value: float) -> float | None:
@@ -124,11 +148,19 @@ class Calibration:
         Parameters
         ----------
         results : iterable of CaseResult
-            E.g. ``Campaign.run()``; analysed by :func:`~millscope.analysis.analyze_campaign`.
+            E.g. ``Campaign.run()``; analysed by
+            :func:`~millscope.campaign_analysis.analyze_campaign`.
         group : str, optional
             The group's name, e.g. ``"LDMS"``; needed when the results hold several groups.
         bootstrap, confidence, seed, sub_blocks
-            As :func:`~millscope.analysis.analyze_campaign` (the intervals go into ``meta``).
+            As :func:`~millscope.campaign_analysis.analyze_campaign` (the intervals go into
+            ``meta``).
+
+        Warns
+        -----
+        NoIntervalWarning
+            when the group has 2 load levels: the calibration is made, but its estimates get
+            no interval (see :meth:`from_group`).
 
         Raises
         ------
@@ -136,6 +168,8 @@ class Calibration:
             when the results hold several groups and none is chosen, or the chosen one is not
             there (the message names the groups); when the group has a single load level.
         """
+        from .campaign_analysis import analyze_campaign  # above fit in the layering
+
         groups = analyze_campaign(results, bootstrap=bootstrap, confidence=confidence,
                                   seed=seed, sub_blocks=sub_blocks)
         names = [g.name for g in groups]
@@ -143,10 +177,10 @@ class Calibration:
             if len(groups) > 1:
                 raise ValueError(f"the results hold {len(groups)} groups ({', '.join(names)}); "
                                  "choose one with group=...")
-            return cls.from_group(groups[0])
+            return cls._from_group(groups[0], stacklevel=3)
         for g in groups:
             if g.name == group:
-                return cls.from_group(g)
+                return cls._from_group(g, stacklevel=3)
         raise ValueError(f"group = {group!r} is not among the groups of the results: "
                          f"{', '.join(names)}")
 
@@ -156,11 +190,25 @@ class Calibration:
         reference, its analysis settings, the band up to the Nyquist frequency of its records,
         and the scatter of one block's energy it showed.
 
+        A group with 2 load levels gives a calibration whose fit is exact (R^2 = 1 trivially):
+        its point estimates are defined, but with no residual scatter to go by it gives them no
+        interval. It is made (refusing would leave a 2-level campaign with nothing), with a
+        :class:`NoIntervalWarning`; :attr:`gives_intervals` is False.
+
+        Warns
+        -----
+        NoIntervalWarning
+            when the group has fewer than ``MIN_LEVELS_FOR_INTERVALS`` (3) load levels.
+
         Raises
         ------
         ValueError
             when the group has a single load level (no fit).
         """
+        return cls._from_group(group, stacklevel=3)
+
+    @classmethod
+    def _from_group(cls, group: GroupAnalysis, *, stacklevel: int) -> Calibration:
         g = group
         if g.fit is None:
             raise ValueError(f"group {g.name} has a single load level ({g.levels[0]:g}); a "
@@ -178,10 +226,22 @@ class Calibration:
             "interval_source": list(g.interval_source),
             "cases": [r.hash for r in g.results],
         }
-        return cls(fit=g.fit, reference_energy=float(g.energy.max()), lifters=g.lifters,
-                   rotation_hz=g.rotation_hz, block_s=g.settings.block_s,
-                   bandwidth=g.settings.bandwidth, window=g.settings.window, label=g.name,
-                   meta=meta, band_hz=band, block_relative_std=g.block_relative_std())
+        calibration = cls(fit=g.fit, reference_energy=float(g.energy.max()), lifters=g.lifters,
+                          rotation_hz=g.rotation_hz, block_s=g.settings.block_s,
+                          bandwidth=g.settings.bandwidth, window=g.settings.window,
+                          label=g.name, meta=meta, band_hz=band,
+                          block_relative_std=g.block_relative_std())
+        if not calibration.gives_intervals:
+            warnings.warn(f"calibration of group {g.name}: {no_interval_reason(g.fit)}; its "
+                          "estimates will have no interval (nan)", NoIntervalWarning,
+                          stacklevel=stacklevel)
+        return calibration
+
+    @property
+    def gives_intervals(self) -> bool:
+        """True when :func:`estimate_fill` can give an interval: the fit goes through at least
+        ``MIN_LEVELS_FOR_INTERVALS`` (3) load levels."""
+        return self.fit.n >= MIN_LEVELS_FOR_INTERVALS and math.isfinite(self.fit.residual_std)
 
     @property
     def remove(self) -> list[RemoveItem]:
@@ -221,6 +281,10 @@ class Calibration:
             raise ValueError(f"{source}: calibration is incomplete or damaged ({exc})") from None
 
 
+def _named(cal: Calibration) -> str:
+    return f" {cal.label}" if cal.label else ""
+
+
 @dataclass(frozen=True)
 class FillEstimate:
     """A filling estimate.
@@ -230,8 +294,8 @@ class FillEstimate:
     level : float
         Estimated load level (Table 5 units).
     interval : (float, float)
-        (low, high) from the calibration's prediction interval (nan when the fit has fewer
-        than 3 points).
+        (low, high) from the calibration's prediction interval; (nan, nan), with a
+        :class:`NoIntervalWarning`, when the fit has fewer than 3 points.
     energy_pu : float
         The per-unit energy it came from.
     energy : float
@@ -259,7 +323,9 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
     interval is the fit's prediction interval, with the new energy's scatter taken as the
     largest of the fit's residuals, the block's own sampling spread
     (:attr:`SpectralEnergy.relative_std`) and the calibration's ``block_relative_std``. Warns
-    with :class:`OutsideCalibrationWarning` outside the calibrated range.
+    with :class:`OutsideCalibrationWarning` outside the calibrated range, and with
+    :class:`NoIntervalWarning` when the calibration cannot give an interval (a fit through 2
+    levels): the interval is then (nan, nan).
 
     Parameters
     ----------
@@ -297,6 +363,8 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
         interval = (bounds[0], bounds[1])
     else:
         interval = (math.nan, math.nan)
+        warnings.warn(f"no interval for the estimate: the calibration{_named(cal)} cannot give "
+                      f"one: {no_interval_reason(cal.fit)}", NoIntervalWarning, stacklevel=2)
     outside = not cal.fit.x_min <= level <= cal.fit.x_max
     if outside:
         warnings.warn(f"estimated level {level:.3g} lies outside the calibrated range "

@@ -7,19 +7,41 @@ it with an anti-aliasing filter (:func:`~millscope.drivetrain.decimate_record`),
 of a described drive (mill turn, shafts, gear meshes, motor; :mod:`millscope.drivetrain`) are
 removed besides the mean and the LTH. ``python -m millscope monitor`` prints the result, one
 line per window.
+
+A calibration of format 1 does not say up to which frequency its energies were counted
+(``band_hz`` None): a fast record could then be neither decimated nor band-limited, and its
+energy would count content the calibration's records never had. Give the band
+(``band_hz=``, ``--band-hz``); without it the monitor warns (:class:`MissingBandWarning`) and
+counts up to the record's Nyquist frequency.
+
+A calibration fitted through 2 load levels gives no interval
+(:class:`~millscope.fit.NoIntervalWarning`): the windows' intervals are (nan, nan), warned
+about once per record, not once per window.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
 
 from .drivetrain import DriveTrain, decimate_record
-from .fit import Calibration, OutsideCalibrationWarning, estimate_fill
+from .fit import (
+    Calibration,
+    NoIntervalWarning,
+    OutsideCalibrationWarning,
+    estimate_fill,
+    no_interval_reason,
+)
 from .record import TorqueRecord
 
-__all__ = ["MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
+__all__ = ["MissingBandWarning", "MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
+
+
+class MissingBandWarning(UserWarning):
+    """The calibration does not give its band (format 1) and none was passed: the record is
+    counted up to its own Nyquist frequency, without decimation."""
 
 
 @dataclass(frozen=True)
@@ -33,7 +55,8 @@ class WindowEstimate:
     level : float
         Estimated load level (Table 5 units).
     interval : (float, float)
-        Its prediction interval (:func:`~millscope.estimate_fill`).
+        Its prediction interval (:func:`~millscope.estimate_fill`); (nan, nan) when the
+        calibration gives none.
     energy_pu : float
         The window's spectral energy per unit of the calibration's reference.
     outside : bool
@@ -86,7 +109,8 @@ def _length(name: str, value: float, dt: float) -> int:
 
 def monitor_record(record: TorqueRecord, calibration: Calibration, *,
                    window_s: float | None = None, step_s: float | None = None,
-                   drive: DriveTrain | None = None, confidence: float = 0.95) -> MonitorResult:
+                   drive: DriveTrain | None = None, confidence: float = 0.95,
+                   band_hz: float | None = None) -> MonitorResult:
     """Estimate the load level in consecutive windows of a long record.
 
     Parameters
@@ -104,6 +128,11 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
         which is located and removed anyway). Its lifter count must be the calibration's.
     confidence : float
         Of the intervals, in (0, 1).
+    band_hz : float, optional
+        Top of the band to count, Hz, for a calibration that does not give one (format 1):
+        the Nyquist frequency of the records it was made from (50 Hz for 10 ms samples).
+        The record is decimated to it as for a format-2 calibration. A calibration with a
+        band takes only its own (or None).
 
     Returns
     -------
@@ -111,15 +140,47 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
         One :class:`WindowEstimate` per window, in time order. Estimates outside the
         calibrated range are flagged (``outside``), not warned about one by one.
 
+    Warns
+    -----
+    NoIntervalWarning
+        once, when the calibration cannot give intervals (a fit through 2 levels).
+    MissingBandWarning
+        when neither the calibration nor ``band_hz`` gives the band: the record is then
+        neither decimated nor band-limited, and a record sampled faster than the
+        calibration's gives biased levels.
+
     Raises
     ------
     ValueError
         for a bad argument (naming it, its value and the valid range) or a record shorter
         than one window, before any window is analysed.
     """
+    return _monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
+                           confidence=confidence, band_hz=band_hz, stacklevel=3)
+
+
+def _with_band(cal: Calibration, band_hz: float | None) -> Calibration:
+    """The calibration with ``band_hz`` filled in where it gives none."""
+    if band_hz is None:
+        return cal
+    if not (isinstance(band_hz, (int, float)) and math.isfinite(band_hz) and band_hz > 0):
+        raise ValueError(f"band_hz = {band_hz!r} is not valid; it must be > 0 Hz")
+    if cal.band_hz is None:
+        return dataclasses.replace(cal, band_hz=float(band_hz))
+    if not math.isclose(band_hz, cal.band_hz, rel_tol=1e-9):
+        raise ValueError(f"band_hz = {band_hz!r} is not valid; the calibration counts energy up "
+                         f"to its own band_hz = {cal.band_hz:g} Hz, and only that band compares")
+    return cal
+
+
+def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s: float | None,
+                    step_s: float | None, drive: DriveTrain | None, confidence: float,
+                    band_hz: float | None, stacklevel: int) -> MonitorResult:
+    """:func:`monitor_record`, its warnings pointing ``stacklevel`` frames up."""
     cal = calibration
     if not isinstance(cal, Calibration):
         raise ValueError(f"calibration = {cal!r} is not valid; it must be a Calibration")
+    cal = _with_band(cal, band_hz)
     if window_s is None:
         window_s = cal.block_s
     elif not (isinstance(window_s, (int, float)) and abs(window_s - cal.block_s) <= record.dt):
@@ -141,12 +202,27 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
     nyquist = 0.5 * analysed.sample_rate_hz
     band = nyquist if cal.band_hz is None else min(cal.band_hz, nyquist)
     lines = () if drive is None else tuple(drive.frequencies_hz(max_hz=band, include_lth=False))
+    if not cal.gives_intervals:
+        label = f" {cal.label}" if cal.label else ""
+        warnings.warn(f"the calibration{label} gives no intervals: "
+                      f"{no_interval_reason(cal.fit)}; every window's interval is (nan, nan)",
+                      NoIntervalWarning, stacklevel=stacklevel)
+    if cal.band_hz is None:
+        label = f" {cal.label}" if cal.label else ""
+        warnings.warn(f"the calibration{label} has no band_hz (a format-1 file) and no band_hz "
+                      f"was given: the {record.sample_rate_hz:g} Hz record is neither decimated "
+                      f"nor band-limited, its energy counted up to {nyquist:g} Hz; if the "
+                      "calibration's records were sampled slower, the levels are biased. Pass "
+                      "band_hz= (command line --band-hz), the Nyquist frequency of the "
+                      "calibration's records (50 Hz for 10 ms samples)", MissingBandWarning,
+                      stacklevel=stacklevel)
     t, x = analysed.time_s, analysed.torque_Nm
     windows = []
     for start in range(0, len(analysed) - width + 1, step):
         block = TorqueRecord(t[start:start + width], x[start:start + width])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", OutsideCalibrationWarning)
+            warnings.simplefilter("ignore", NoIntervalWarning)  # warned once above
             est = estimate_fill(block, cal, confidence=confidence, lines_hz=lines)
         windows.append(WindowEstimate(float(t[start]), float(t[start] + width * dt), est.level,
                                       est.interval, est.energy_pu, est.outside))
@@ -158,8 +234,8 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
 
 def monitor(record: TorqueRecord, calibration: Calibration, *, window_s: float | None = None,
             step_s: float | None = None, drive: DriveTrain | None = None,
-            confidence: float = 0.95) -> list[WindowEstimate]:
+            confidence: float = 0.95, band_hz: float | None = None) -> list[WindowEstimate]:
     """The filling estimate of every window of a long record: :func:`monitor_record`'s
     windows (same parameters)."""
-    return monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
-                          confidence=confidence).windows
+    return _monitor_record(record, calibration, window_s=window_s, step_s=step_s, drive=drive,
+                           confidence=confidence, band_hz=band_hz, stacklevel=3).windows

@@ -478,9 +478,20 @@ def _plot_against_level(groups: Mapping[str, GroupSeries], *, ylabel: str, title
     return fig
 
 
+#: Default lower edge of Fig. 9's y axis, per unit: the mean torque changes by well under 1 %
+#: over the load levels, and an autoscaled axis would blow that up to fill the figure.
+TORQUE_PU_FLOOR = 0.9
+
+
 def plot_torque_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,
-                       ax: Axes | None = None, title: str | None = None) -> Figure:
+                       ax: Axes | None = None, title: str | None = None,
+                       floor: float | None = TORQUE_PU_FLOOR) -> Figure:
     """Mean torque per unit of each group's largest against load level (paper Fig. 9).
+
+    The paper's point is that the mean torque barely changes with filling, so the y axis is
+    not autoscaled: it runs from ``floor`` (0.9 per unit by default, lower if a value is) to
+    just above 1 (or the largest value), so a change of 0.4 % looks like one. The largest
+    change within a group, (max - min) / max, is written in the legend's title.
 
     Parameters
     ----------
@@ -489,15 +500,40 @@ def plot_torque_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,
     ax : Axes, optional
         Draw here instead of in a new figure.
     title : str, optional
+    floor : float or None
+        Lower edge of the y axis, per unit, in (0, 1); None: autoscale (zoomed in on the
+        variation).
 
     Returns
     -------
     Figure
         One errorbar container per group (``ax.containers``), labelled with its name.
     """
-    return _plot_against_level(groups, ylabel="mean torque (per unit)",
-                               title=title or "Average torque against filling level", ax=ax,
-                               intervals=False)
+    if floor is not None and not (isinstance(floor, (int, float)) and 0 < floor < 1):
+        raise ValueError(f"floor = {floor!r} is not valid; it must be in (0, 1) per unit, "
+                         "or None to autoscale")
+    fig = _plot_against_level(groups, ylabel="mean torque (per unit)",
+                              title=title or "Average torque against filling level", ax=ax,
+                              intervals=False)
+    axes = ax if ax is not None else fig.axes[0]
+    changes = {}
+    for name, (_, values) in groups.items():
+        y = np.asarray(values, dtype=np.float64)
+        if np.all(np.isfinite(y)) and np.max(y) > 0:
+            changes[name] = (np.max(y) - np.min(y)) / np.max(y)
+    if changes:
+        name = max(changes, key=lambda k: changes[k])
+        axes.legend(fontsize="small", title_fontsize="small",
+                    title=f"largest change within a group: {100 * changes[name]:.2g} % "
+                          f"({name})")
+    if floor is not None:
+        finite = np.concatenate([np.asarray(v, dtype=np.float64) for _, v in groups.values()])
+        finite = finite[np.isfinite(finite)]
+        low = min(floor, float(finite.min())) if finite.size else floor
+        high = max(1.0, float(finite.max())) if finite.size else 1.0
+        pad = 0.02 * (high - low)
+        axes.set_ylim(low - pad, high + pad)
+    return fig
 
 
 def plot_lth_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,

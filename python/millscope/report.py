@@ -1,7 +1,7 @@
 """The report of a campaign store: the paper's section 6 as Markdown with PNG figures.
 
 :func:`write_report` reads a store (:meth:`~millscope.campaign.Campaign.from_store`), analyses
-it (:func:`~millscope.analysis.analyze_campaign`) and writes into one folder:
+it (:func:`~millscope.campaign_analysis.analyze_campaign`) and writes into one folder:
 
 * ``report.md``: the campaign at a glance, the Table 6 analogue (log fits with bootstrap
   intervals), a table per group (per level: mean torque, LTH, energy per unit with its interval),
@@ -10,7 +10,10 @@ it (:func:`~millscope.analysis.analyze_campaign`) and writes into one folder:
   (the spectra of a group with the LTH marked), ``fig11_lth.png`` (LTH amplitude against
   filling), ``fig12_waterfall_<group>.png`` (Figs. 12-13, a waterfall per group),
   ``fig14_energy.png`` (energy per unit against filling), ``fig15_fits.png`` (the log fits);
-* ``calibration_<group>.json``: a :class:`~millscope.Calibration` per group with a fit.
+* ``calibration_<group>.json``: a :class:`~millscope.Calibration` per group with a fit through
+  at least 3 load levels. A group with 2 levels gets none, and its section says why: the fit
+  is exact (R^2 = 1 trivially) and could give a filling estimate no interval
+  (:class:`~millscope.fit.NoIntervalWarning`); Table 6 marks such fits "exact".
 
 ``python -m millscope report STORE [--out DIR]`` runs it. Every file is written atomically.
 """
@@ -30,9 +33,9 @@ from tqdm.auto import tqdm
 
 from . import _core, plots
 from ._files import atomic_write
-from .analysis import GroupAnalysis, analyze_campaign, table6_markdown
 from .campaign import Campaign, CaseResult
-from .fit import Calibration
+from .campaign_analysis import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
+from .fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from .presets import case_key
 from .spectral import spectrum
 
@@ -83,7 +86,10 @@ def _spectra(group: GroupAnalysis) -> tuple[list, list[str], list[float | None]]
 def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
     figs = [_Figure("fig09_torque.png", "Fig. 9: average torque",
                     "Mean torque over the block per unit of each group's largest, against the "
-                    "load level (mean over the repeats of a level).",
+                    "load level (mean over the repeats of a level). The axis starts at "
+                    f"{plots.TORQUE_PU_FLOOR:g} per unit, not at the smallest value, so the "
+                    "change with filling shows at its true size; the legend gives the largest "
+                    "change within a group.",
                     lambda: plots.plot_torque_levels(
                         {g.name: (g.levels, g.torque_pu) for g in groups}))]
     for g in groups:
@@ -169,7 +175,7 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
     block : (float, float), optional
         Block to analyse, s; default: as the store's campaign analysed its cases.
     bootstrap, confidence, seed, sub_blocks
-        As :func:`~millscope.analysis.analyze_campaign`.
+        As :func:`~millscope.campaign_analysis.analyze_campaign`.
 
     Returns
     -------
@@ -204,7 +210,7 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
         written.append(fig)
     calibrations: dict[str, str] = {}
     for g in groups:
-        if g.fit is not None:
+        if g.fit is not None and g.fit.n >= MIN_LEVELS_FOR_INTERVALS:
             name = f"calibration_{_slug(g.name)}.json"
             Calibration.from_group(g).save(target / name)
             calibrations[g.name] = name
@@ -254,10 +260,13 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
                   f"Particles: {g.particles}; {speed}{g.rotation_hz:.4f} Hz, {g.lifters} lifters "
                   f"(LTH expected at {g.lifters * g.rotation_hz:.3f} Hz).", ""]
         if g.fit is not None:
-            lines += [f"Fit: {g.fit.equation()}, R² = {g.fit.r2:.4f}.", ""]
+            lines += [f"Fit: {g.fit.equation()}, R² = {r2_text(g.fit)}.", ""]
         lines += _group_table(g) + [""]
         if g.name in calibrations:
             lines += [f"Calibration: [`{calibrations[g.name]}`]({calibrations[g.name]}).", ""]
+        elif g.fit is not None:
+            lines += [f"No calibration file: {no_interval_reason(g.fit)}, so the filling "
+                      "estimates it gave would have no interval.", ""]
     if written:
         lines += ["## Figures", ""]
         for fig in written:
