@@ -2,6 +2,7 @@
 #include <pybind11/stl.h>
 
 #include <cstdint>
+#include <limits>
 
 #include "millscope/engine.hpp"
 #include "numpy_view.hpp"
@@ -62,7 +63,7 @@ void register_engine(py::module_& m) {
                        const InArray& friction, int drum_material, const drum::Geometry& geometry,
                        const InArray& radius, const IntArray& material, double dt, double gravity,
                        double skin, bool clamp_normal, int threads, bool reorder,
-                       bool track_energy) {
+                       bool track_energy, double max_speed, double max_overlap) {
              en::Config c;
              c.materials = std::move(materials);
              c.restitution.assign(restitution.data(), restitution.data() + restitution.size());
@@ -80,12 +81,15 @@ void register_engine(py::module_& m) {
              c.reorder = reorder;
              c.track_energy = track_energy;
              c.threads = threads;
+             c.max_speed = max_speed;
+             c.max_overlap = max_overlap;
              return en::Engine(std::move(c));
            }),
            arg("materials"), arg("restitution"), arg("friction"), arg("drum_material"),
            arg("geometry"), arg("radius"), arg("material"), arg("dt"), arg("gravity") = 9.81,
            arg("skin") = 0.0, arg("clamp_normal") = false, arg("threads") = 1,
-           arg("reorder") = true, arg("track_energy") = true)
+           arg("reorder") = true, arg("track_energy") = true,
+           arg("max_speed") = std::numeric_limits<double>::infinity(), arg("max_overlap") = 0.5)
       .def_property_readonly("size", &en::Engine::size)
       .def_property_readonly("dt", &en::Engine::dt)
       .def_property_readonly("threads", &en::Engine::threads)
@@ -94,6 +98,10 @@ void register_engine(py::module_& m) {
                              [](const en::Engine& e) { return e.variant().track_energy; },
                              "Whether the step books the dissipated energy (a law that dissipates)")
       .def_property_readonly("skin", &en::Engine::skin)
+      .def_property_readonly("max_speed", &en::Engine::max_speed,
+                             "Guard: the speed no particle may exceed, m/s")
+      .def_property_readonly("max_overlap", &en::Engine::max_overlap,
+                             "Guard: the deepest contact allowed, a fraction of the smaller radius")
       .def_property_readonly("list_builds", &en::Engine::list_builds)
       .def_property_readonly("list_pairs", &en::Engine::list_pairs)
       .def_property_readonly("bytes_per_particle", &en::Engine::bytes_per_particle)

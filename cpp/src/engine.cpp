@@ -54,6 +54,9 @@ void validate(const Config& c) {
   if (!(c.gravity >= 0.0) || !std::isfinite(c.gravity)) invalid("gravity", c.gravity, "finite and >= 0 m/s^2");
   if (!(c.skin >= 0.0) || !std::isfinite(c.skin)) invalid("skin", c.skin, "finite and >= 0 m (0: default)");
   if (c.threads < 1) invalid("threads", c.threads, ">= 1");
+  if (!(c.max_speed > 0.0)) invalid("max_speed", c.max_speed, "> 0 m/s (infinity: no bound)");
+  if (!(c.max_overlap > 0.0 && c.max_overlap <= 1.0))
+    invalid("max_overlap", c.max_overlap, "in (0, 1] (a fraction of the smaller radius)");
   // The time step against the smallest Rayleigh time of the charge (DESIGN.md section 2).
   double t_min = HUGE_VAL;
   for (std::size_t i = 0; i < c.radius.size(); ++i) {
@@ -647,18 +650,39 @@ std::string Engine::Access::describe_bad(const Engine& e, std::size_t i) {
   const double values[] = {e.x_[i], e.y_[i], e.z_[i], e.vx_[i], e.vy_[i], e.vz_[i],
                            e.fx_[i], e.fy_[i], e.fz_[i]};
   const bool finite = std::all_of(std::begin(values), std::end(values),
-                                  [](double v) { return std::isfinite(v); });
+                                  [](double v) { return std::isfinite(v); }) &&
+                      std::isfinite(e.wx_[i] + e.wy_[i] + e.wz_[i] + e.tx_[i] + e.ty_[i] + e.tz_[i]);
+  const double speed = std::sqrt(e.vx_[i] * e.vx_[i] + e.vy_[i] * e.vy_[i] + e.vz_[i] * e.vz_[i]);
   if (!finite) {
     msg << "has non-finite values";
-  } else {
+  } else if (rho > e.config_.geometry.radius) {
     msg << "has left the drum: its centre is " << rho << " m from the axis, beyond the shell at "
         << e.config_.geometry.radius << " m";
+  } else {
+    msg << "moves at " << speed << " m/s, above the bound of " << e.config_.max_speed
+        << " m/s no particle of this scene can reach";
   }
   msg << " (position " << e.x_[i] << ", " << e.y_[i] << ", " << e.z_[i] << " m; velocity "
       << e.vx_[i] << ", " << e.vy_[i] << ", " << e.vz_[i] << " m/s; force " << e.fx_[i] << ", "
       << e.fy_[i] << ", " << e.fz_[i] << " N). Hint: the time step (" << e.dt_
       << " s) is probably too large for the contact stiffness or the impact speeds; try a "
          "smaller dt, or check the initial positions for large overlaps.";
+  return msg.str();
+}
+
+std::string Engine::Access::describe_overlap(const Engine& e, std::size_t i, double ratio,
+                                             bool wall) {
+  std::ostringstream msg;
+  msg.precision(6);
+  msg << "the simulation stopped at step " << e.step_ << " (t = " << e.time() << " s): particle "
+      << e.order_[i] << " (radius " << e.r_[i] << " m, material " << static_cast<int>(e.mat_[i])
+      << ") overlaps " << (wall ? "the drum" : "another particle") << " by " << ratio
+      << " of the " << (wall ? "particle's" : "smaller") << " radius, above the limit of "
+      << e.config_.max_overlap << " (position " << e.x_[i] << ", " << e.y_[i] << ", " << e.z_[i]
+      << " m; velocity " << e.vx_[i] << ", " << e.vy_[i] << ", " << e.vz_[i]
+      << " m/s). Hint: contacts this deep are outside Hertz theory; the time step (" << e.dt_
+      << " s) may be too large for the impact speeds, the contacts too soft for them (a shear "
+         "modulus reduced too far), or the initial positions overlap.";
   return msg.str();
 }
 

@@ -357,9 +357,3 @@ def test_engine_refuses_bad_settings(field: str, kwargs: dict, pattern: str) -> 
                          np.array(radius, float), np.zeros(1, np.int32), 1e-6)
         else:
             make_engine(radius, **args)
-
-
-def test_guard_stops_on_a_particle_outside_the_drum() -> None:
-    eng = make_engine([0.0125], gravity=0.0, positions=[[0.5, 0.0, 0.1]])
-    with pytest.raises(RuntimeError, match=r"particle 0 .* has left the drum.*Hint"):
-        eng.advance(1)

@@ -33,6 +33,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,10 @@ struct Config {
   bool reorder = true;              // store the particles in cell order at each list build
   bool track_energy = true;         // book the dissipated energy (Ledger); off: only drive_work
   int threads = 1;
+  // Guards: a step that breaks one stops the run with a message (step, particle, values, hint).
+  double max_speed = std::numeric_limits<double>::infinity();  // m/s, > 0; a particle faster
+  double max_overlap = 0.5;  // in (0, 1]: a contact deeper than this x the smaller radius (the
+                             // particle's at a wall)
 };
 
 /// Drive torque about the drum axis, N m (positive: the drive pushes the drum forward).
@@ -143,6 +148,8 @@ class Engine {
   const Variant& variant() const { return variant_; }
   const drum::Geometry& geometry() const { return config_.geometry; }
   double skin() const { return list_.skin(); }
+  double max_speed() const { return config_.max_speed; }      // guard, m/s
+  double max_overlap() const { return config_.max_overlap; }  // guard, of the smaller radius
   long list_builds() const { return list_.builds(); }
   std::size_t list_pairs() const { return list_.pairs(); }
   /// Bytes held per particle: state, wall history, neighbour list and its history, buffers.

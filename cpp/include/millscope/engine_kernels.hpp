@@ -29,6 +29,9 @@ struct alignas(64) StepPartial {
   double displacement2 = 0.0;                     // largest squared move since the list build
   std::size_t bad = std::numeric_limits<std::size_t>::max();  // first particle in a bad state
   std::size_t homeless = std::numeric_limits<std::size_t>::max();  // touches the drum, no block
+  std::size_t deepest = std::numeric_limits<std::size_t>::max();   // a contact beyond max_overlap
+  double deepest_ratio = 0.0;                                       // its overlap / radius
+  bool deepest_at_wall = false;
 };
 
 struct Engine::Access {
@@ -39,6 +42,7 @@ struct Engine::Access {
   static void refresh_walls(Engine& e);
   static void split_rows(Engine& e);
   static std::string describe_bad(const Engine& e, std::size_t i);
+  static std::string describe_overlap(const Engine& e, std::size_t i, double ratio, bool wall);
 };
 
 template <class Law, bool OneMaterial, bool Lifters, bool EndWalls, bool Tally>
@@ -74,6 +78,17 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   const double skin_half = 0.5 * e.list_.skin() - ref_rounding;
   const double skin_half2 = skin_half * skin_half;
   const double lifter_drift = 0.5 * e.list_.skin();  // see refresh_walls
+  const double max_speed2 =  // finite, so that an infinite speed fails the guard
+      std::min(e.config_.max_speed * e.config_.max_speed, std::numeric_limits<double>::max());
+  const double max_overlap = e.config_.max_overlap;
+  // Guard: a contact deeper than max_overlap x the smaller radius (rare: a predictable branch).
+  auto note_overlap = [](StepPartial& part, std::size_t i, double ratio, bool wall) {
+    if (ratio > part.deepest_ratio) {
+      part.deepest = i;
+      part.deepest_ratio = ratio;
+      part.deepest_at_wall = wall;
+    }
+  };
 
   double* const x = e.x_.data();
   double* const y = e.y_.data();
@@ -146,6 +161,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           continue;
         }
         const double dist = std::sqrt(d2);
+        const double r_min = std::min(r[i], r[j]);
+        if (r_sum - dist > max_overlap * r_min) note_overlap(part, i, (r_sum - dist) / r_min, false);
         const double inv_dist = 1.0 / dist;
         const Vec3 nrm(dx * inv_dist, dy * inv_dist, dz * inv_dist);  // from j to i
         const Vec3 vi(vx[i], vy[i], vz[i]), vj(vx[j], vy[j], vz[j]);
@@ -198,13 +215,14 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     }
   };
 
-  // Guard: nothing non-finite, no centre beyond the shell. Non-finite forces or torques show
-  // in the velocities after a kick.
-  auto guard = [&](std::size_t i, StepPartial& part) {
-    const double check = fx[i] + fy[i] + fz[i] + vx[i] + vy[i] + vz[i] + wx[i] + wy[i] + wz[i] +
-                         x[i] + y[i] + z[i];
-    if (!std::isfinite(check) || x[i] * x[i] + y[i] * y[i] > geom.radius * geom.radius)
-      part.bad = std::min(part.bad, i);
+  // Guard: no speed above the bound, no centre beyond the shell. Called after a kick and a
+  // drift: a non-finite force makes the velocity non-finite (NaN fails every comparison, and
+  // an infinite speed exceeds max_speed2, which is finite), a non-finite torque the spin and
+  // through it the next step's forces.
+  const double radius2 = geom.radius * geom.radius;
+  auto sound = [&](std::size_t i) {
+    const double speed2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+    return speed2 <= max_speed2 && x[i] * x[i] + y[i] * y[i] <= radius2;
   };
 
   // Per particle: sum the thread buffers, add the drum's contacts and gravity, then (kick)
@@ -284,6 +302,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           used |= 1u << slot;
           hist = wall_hist + slot * 3;
         }
+        if (wc.overlap > max_overlap * r[i]) note_overlap(part, i, wc.overlap / r[i], true);
         const Vec3 v_wall = drum::surface_velocity(omega, wc.point);
         Vec3 v_rel = vi - v_wall;
         if constexpr (friction) v_rel += wi.cross(-r[i] * wc.normal);
@@ -346,7 +365,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         // integrator removes is their work with the full-step ones (Ledger::dissipated).
         if constexpr (dissipates) part.dissipation_shift -= (diss.dot(dv) + diss_tq.dot(dw)) * dt;
       }
-      if (!kick) guard(i, part);  // a step's kick_drift checks it otherwise
+      // a step's kick_drift checks it otherwise
+      if (!kick && !sound(i)) part.bad = std::min(part.bad, i);
     }
   };
 
@@ -356,28 +376,42 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
     const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
     double move2 = 0.0;
+    bool all_sound = true;  // a flag, not the index, in the loop
     for (std::size_t i = lo; i < hi; ++i) {
-      vx[i] += fx[i] * inv_m[i] * half_dt;
-      vy[i] += fy[i] * inv_m[i] * half_dt;
-      vz[i] += fz[i] * inv_m[i] * half_dt;
+      // in locals, so that the guard reads them from registers (stores through the arrays
+      // would make the compiler load them again)
+      const double vxi = vx[i] + fx[i] * inv_m[i] * half_dt;
+      const double vyi = vy[i] + fy[i] * inv_m[i] * half_dt;
+      const double vzi = vz[i] + fz[i] * inv_m[i] * half_dt;
+      vx[i] = vxi;
+      vy[i] = vyi;
+      vz[i] = vzi;
       if constexpr (friction) {
         wx[i] += tx[i] * inv_i[i] * half_dt;
         wy[i] += ty[i] * inv_i[i] * half_dt;
         wz[i] += tz[i] * inv_i[i] * half_dt;
       }
-      x[i] += vx[i] * dt;
-      y[i] += vy[i] * dt;
-      z[i] += vz[i] * dt;
-      double dz = z[i] - e.z_ref_[i];
+      const double xi = x[i] + vxi * dt, yi = y[i] + vyi * dt;
+      double zi = z[i] + vzi * dt;
+      double dz = zi - e.z_ref_[i];
       if constexpr (!EndWalls) {
-        z[i] -= period * std::floor(z[i] / period);
+        zi -= period * std::floor(zi / period);
         dz -= period * std::nearbyint(dz / period);
       }
-      const double dx = x[i] - e.x_ref_[i], dy = y[i] - e.y_ref_[i];
+      x[i] = xi;
+      y[i] = yi;
+      z[i] = zi;
+      const double dx = xi - e.x_ref_[i], dy = yi - e.y_ref_[i];
       move2 = std::max(move2, dx * dx + dy * dy + dz * dz);
-      guard(i, part);
+      // the guard (see sound), branch-free
+      all_sound &= (vxi * vxi + vyi * vyi + vzi * vzi <= max_speed2) &
+                   (xi * xi + yi * yi <= radius2);
     }
     part.displacement2 = move2;
+    if (!all_sound) {  // rare: find the first particle that failed
+      for (std::size_t i = lo; i < hi && part.bad == std::numeric_limits<std::size_t>::max(); ++i)
+        if (!sound(i)) part.bad = i;
+    }
   };
 
   // Closes a step from its partials, summed in thread order (reproducible): every thread
@@ -387,9 +421,11 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     Torque tq;
     double damping = 0.0, friction_loss = 0.0, shift = 0.0;
     std::size_t bad = std::numeric_limits<std::size_t>::max(), homeless = bad;
+    const StepPartial* deepest = nullptr;  // the deepest contact beyond max_overlap
     for (int b = 0; b < team; ++b) {
       const StepPartial& p = parts[b];
       homeless = std::min(homeless, p.homeless);
+      if (p.deepest_ratio > (deepest ? deepest->deepest_ratio : 0.0)) deepest = &p;
       tq.shell += p.shell;
       tq.lifters += p.lifters;
       tq.ends += p.ends;
@@ -422,6 +458,12 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     }
     if (bad != std::numeric_limits<std::size_t>::max()) {
       if (master) error = describe_bad(e, bad);
+      return true;
+    }
+    if (deepest != nullptr) {
+      if (master)
+        error = describe_overlap(e, deepest->deepest, deepest->deepest_ratio,
+                                 deepest->deepest_at_wall);
       return true;
     }
     return false;
