@@ -55,10 +55,12 @@ def test_demo_runs_a_dem_campaign_into_the_store(demo: tuple[Path, DemoResult]) 
 
 def test_demo_report_agrees_with_the_stored_records(demo: tuple[Path, DemoResult]) -> None:
     out, result = demo
-    for name in ("report.md", "waterfall.png", "energy_fit.png", "calibration.json",
-                 "torque_level1.png", "spectrum_level1.png", "filtered_level1.png"):
+    for name in ("report.md", "fig12_waterfall_LDMS.png", "fig15_fits.png", "fig14_energy.png",
+                 "calibration_LDMS.json", "torque_level1.png", "spectrum_level1.png",
+                 "filtered_level1.png"):
         assert (out / name).stat().st_size > 0, name
     assert result.report == out / "report.md"
+    assert result.calibration == out / "calibration_LDMS.json"
 
     # the energies re-computed from the raw records: mean and LTH (located as the paper does,
     # near 16 x rotation frequency) removed, Hann window, 0.3 Hz bands
@@ -74,21 +76,36 @@ def test_demo_report_agrees_with_the_stored_records(demo: tuple[Path, DemoResult
     pu = e / e.max()
     a, b = np.polyfit(np.log(levels), pu, 1)  # y = a ln(x) + b by plain least squares
 
-    cal = ms.Calibration.load(out / "calibration.json")
+    cal = ms.Calibration.load(result.calibration)
     assert cal.reference_energy == pytest.approx(e.max(), rel=1e-9)
     assert (cal.fit.a, cal.fit.b) == pytest.approx((a, b), rel=1e-9, abs=1e-12)
     assert cal.block_s == pytest.approx(0.8) and cal.lifters == 16
     assert cal.rotation_hz == pytest.approx(ms.presets.pilot_mill(0.71).rotation_hz)
 
     text = (out / "report.md").read_text()
+    # the campaign report (Table 6 analogue, per-level table) and the main job's section
+    assert "## Table 6 analogue" in text and "## LDMS" in text and "## Main job: LDMS" in text
     for level, y in zip(levels, pu, strict=True):
-        # the row: case, level, particles, mean T, mean T p.u., LTH Hz, LTH N m, E, E p.u., ...
-        row = rf"\| LDMS#{level:g} \| {level:g} \|(?:[^|\n]*\|){{6}} {y:.3f} \|"
-        assert re.search(row, text), (level, y)
+        # the group table: level, cases, mean T, T p.u., LTH Hz, LTH N m, E, E p.u. [interval]
+        row = rf"^\| {level:g} \| 1 \|(?:[^|\n]*\|){{5}} {y:.4f}[ [|]"
+        assert re.search(row, text, re.M), (level, y)
+    assert f"**Energy p.u.: {', '.join(f'{y:.3f}' for y in pu)}**" in text
     falls = bool(np.all(np.diff(pu) < 0))
     assert ("falls monotonically" in text) == falls
     assert ("does NOT fall monotonically" in text) == (not falls)
     assert "tiny" in text and "Leave-one-out" in text
+    for name in ("torque_level1.png", "fig12_waterfall_LDMS.png", "fig15_fits.png"):
+        assert f"]({name})" in text, name
+
+
+def test_a_two_level_demo_writes_no_calibration(tmp_path: Path) -> None:
+    """Through 2 levels the fit is exact and gives no interval: the report writes no
+    calibration for it and says why; the main job's section has no leave-one-out table."""
+    plan = DemoPlan(scale="tiny", load_levels=(1, 2), duration_s=0.9, warm_up_s=0.2)
+    result = run_demo(tmp_path, plan, progress=False)
+    assert result.calibration is None and not list(tmp_path.glob("calibration*.json"))
+    text = result.report.read_text()
+    assert "No calibration file" in text and "Leave-one-out" not in text
 
 
 def test_leave_one_out_of_3_levels_says_its_2_level_fits_give_no_interval(

@@ -270,8 +270,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="the main job: a small DEM campaign and its report in --out",
                        description="Runs one material at one speed at several load levels "
                                    "through a Campaign into OUT/store (a rerun reuses finished "
-                                   "cases) and writes the report into OUT: waterfall, per-unit "
-                                   "energies with their log fit, calibration, report.md. The "
+                                   "cases) and writes the campaign report into OUT (as 'report' "
+                                   "does: report.md, Table 6, Figs. 9-15 with the waterfall and "
+                                   "the log fit, a calibration) with a section on the energy's "
+                                   "fall with filling and a leave-one-out check. The "
                                    "defaults take about 5 minutes on 2 cores.")
     p.add_argument("--out", default="out", help="output folder (default out)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

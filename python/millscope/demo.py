@@ -2,10 +2,11 @@
 
 :func:`run_demo` runs one material at one speed at several load levels through
 :class:`~millscope.campaign.Campaign` into ``<out>/store`` (resumable: a rerun reuses the
-finished cases), then writes the report into ``<out>``: the torque, spectrum and filtered signal
-of the lowest level, the waterfall of the spectra, the per-unit spectral energies with their
-log fit y = a ln(x) + b (the paper's Table 6 and Fig. 15), a :class:`~millscope.fit.Calibration`
-and ``report.md``. The defaults (:class:`DemoPlan`) are the LDMS case (ceramic-like particles,
+finished cases), then writes the campaign report into ``<out>``
+(:func:`millscope.report.write_report`: the Table 6 analogue, Figs. 9-15 with the waterfall and
+the log fit y = a ln(x) + b, a :class:`~millscope.fit.Calibration` per group) with a main-job
+section (:func:`main_job_section`): the torque, spectrum and filtered signal of the lowest
+level, whether the energy falls monotonically with the filling, and a leave-one-out check. The defaults (:class:`DemoPlan`) are the LDMS case (ceramic-like particles,
 71 % of critical) at load levels 1..4 at the ``"tiny"`` scale, 8 s of rotation each of which
 the block 2-8 s is analysed: about 5 minutes on 2 cores (README, "Two commands").
 
@@ -45,12 +46,13 @@ from .fit import (
 )
 from .presets import LIFTER_COUNT, LOAD_LEVELS, PARTICLE_KINDS, SCALES, paper_cases, pilot_mill
 from .record import TorqueRecord
+from .report import calibration_file_name, write_report
 from .simulation import _available_cores
 from .spectral import band_stop, lifter_harmonic_hz, spectrum
 from .synthetic import PAPER_HDMS_LAW, SyntheticTorque, synthetic_record
 
-__all__ = ["DemoPlan", "DemoResult", "pilot_mill_rotation_hz", "run_demo",
-           "run_synthetic_demo", "write_interim_report"]
+__all__ = ["DemoPlan", "DemoResult", "main_job_section", "pilot_mill_rotation_hz", "run_demo",
+           "run_synthetic_demo"]
 
 
 LTH_CLEAR_BINS = 6.0  # the block holds at least this many periods of the LTH (see DemoPlan)
@@ -181,12 +183,16 @@ class DemoResult:
         The report (``report.md``).
     wall_time_s : float
         Wall-clock time of the campaign (cases already in the store cost nothing), s.
+    calibration : Path or None
+        The group's calibration written by the report (``calibration_<group>.json``); None
+        with fewer than 3 load levels, whose fit is exact and gives no interval.
     """
 
     plan: DemoPlan
     results: list[CaseResult]
     report: Path
     wall_time_s: float
+    calibration: Path | None = None
 
 
 def run_demo(out: str | os.PathLike[str], plan: DemoPlan | None = None, *,
@@ -245,17 +251,25 @@ def run_demo(out: str | os.PathLike[str], plan: DemoPlan | None = None, *,
                            f"{failed[0].scene.name}: {failed[0].error}; see "
                            f"{campaign.store / 'manifest.json'} (a rerun retries them)")
     results = sorted(results, key=_level)
-    # The one call site of the report: millscope.report.write_report(store, out) replaces it
-    # once it lands.
-    report = write_interim_report(results, folder, plan=plan, campaign_wall_s=wall,
-                                  progress=progress)
-    return DemoResult(plan, results, report, wall)
+    section = main_job_section(results, folder, plan=plan, campaign_wall_s=wall)
+    report = write_report(campaign.store, folder, progress=progress, sections=[section])
+    calibration = folder / calibration_file_name(_group(results[0]))
+    if progress:
+        print(f"millscope demo: report written to {report}")
+    return DemoResult(plan, results, report, wall,
+                      calibration if calibration.is_file() else None)
 
 
 def _level(result: CaseResult) -> int:
     """Load level of a case (Table 5), from its name (``"LDMS#3"``: :func:`presets.case_name`)."""
     name = result.scene.name
     return int(name.rsplit("#", 1)[1])
+
+
+def _group(result: CaseResult) -> str:
+    """The group (material x speed) of a case, from its name (``"LDMS#3"`` -> ``"LDMS"``), as
+    :func:`~millscope.campaign_analysis.analyze_campaign` names it."""
+    return result.scene.name.rsplit("#", 1)[0]
 
 
 @dataclass(frozen=True)
@@ -265,99 +279,76 @@ class _Row:
     block: TorqueRecord
 
 
-def write_interim_report(results: Sequence[CaseResult], out: str | os.PathLike[str], *,
-                         plan: DemoPlan, campaign_wall_s: float = math.nan,
-                         progress: bool = True) -> Path:
-    """The demo's report from what the campaign gives, until ``millscope.report`` lands.
+def main_job_section(results: Sequence[CaseResult], out: str | os.PathLike[str], *,
+                     plan: DemoPlan, campaign_wall_s: float = math.nan) -> str:
+    """The main job's part of the report: what ran, whether the energy falls with the filling,
+    and a leave-one-out check of the calibration.
 
-    Writes into ``out``: ``torque_level<k>.png``, ``spectrum_level<k>.png`` and
-    ``filtered_level<k>.png`` for the lowest level k, ``waterfall.png``, ``energy_fit.png``,
-    ``calibration.json`` and ``report.md`` (settings, the table of mean torque, LTH and
-    spectral energy per level, the log fit, whether the energy falls monotonically with the
-    filling, and leave-one-out filling estimates).
+    Writes into ``out`` the torque, spectrum (LTH marked) and filtered signal of the lowest
+    level (``torque_level<k>.png``, ``spectrum_level<k>.png``, ``filtered_level<k>.png``: the
+    paper's Figs. 2, 10 and 3 for one case) and returns a Markdown section that shows them and
+    gives the energies per unit with the verdict (monotonic fall or not, paper section 6.4) and,
+    with 3 or more levels, each level's filling estimated from a calibration fitted without it.
+    :func:`run_demo` puts it into the report of :func:`millscope.report.write_report`.
 
     Parameters
     ----------
     results : sequence of CaseResult
         Done cases of one material and speed, analysed over ``plan.block``, one per level.
     out : path
-        Output folder.
+        Output folder for the figures.
     plan : DemoPlan
         The plan the results came from.
     campaign_wall_s : float
         Wall-clock time of the campaign, s (reported).
-    progress : bool
-        Print where the report went.
 
     Returns
     -------
-    Path
-        ``out/report.md``.
+    str
+        The Markdown section, headed ``## Main job``.
+
+    Raises
+    ------
+    ValueError
+        with fewer than 2 done cases, or two cases at one level.
     """
     folder = Path(out)
-    folder.mkdir(parents=True, exist_ok=True)
     if len(results) < 2 or any(not r.ok or r.record is None for r in results):
-        raise ValueError("write_interim_report needs at least 2 done cases")
+        raise ValueError(f"main_job_section needs at least 2 done cases; got {len(results)} "
+                         f"of which {sum(r.ok for r in results)} done")
     rows = sorted((_Row(_level(r), r, r.record.block(*plan.block))  # type: ignore[union-attr]
                    for r in results), key=lambda row: row.level)
     levels = np.array([row.level for row in rows], dtype=np.float64)
     if len(set(levels.tolist())) != len(rows):
-        raise ValueError(f"write_interim_report needs one case per level; got levels "
+        raise ValueError(f"main_job_section needs one case per level; got levels "
                          f"{levels.tolist()}")
+    folder.mkdir(parents=True, exist_ok=True)
     first = rows[0]
     meta = first.block.meta
     lifters, rotation_hz = int(meta["lifters"]), float(meta["rotation_hz"])
-    group = first.result.scene.name.rsplit("#", 1)[0]
     written: list[str] = []
 
     def save(fig: object, name: str) -> None:
         plots.save_figure(fig, folder / name)  # type: ignore[arg-type]
         written.append(name)
 
-    # the lowest level: torque, spectrum with the LTH, the filtered signal (Figs. 2, 10, 3)
     k = first.level
-    save(plots.plot_torque(first.block, title=f"{first.result.scene.name}: drive torque "
-                                              f"({plan.scale} scale, DEM)"),
+    name = first.result.scene.name
+    save(plots.plot_torque(first.block, title=f"{name}: drive torque ({plan.scale} scale, DEM)"),
          f"torque_level{k}.png")
-    spectra = [spectrum(row.block) for row in rows]
-    save(plots.plot_spectrum(spectra[0], lth_hz=first.result.lth_hz,
-                             title=f"{first.result.scene.name}: torque spectrum"),
-         f"spectrum_level{k}.png")
+    save(plots.plot_spectrum(spectrum(first.block), lth_hz=first.result.lth_hz,
+                             title=f"{name}: torque spectrum"), f"spectrum_level{k}.png")
     filtered = band_stop(first.block, ["mean", first.result.lth_hz], window="rectangular")
     save(plots.plot_filtered(first.block, filtered), f"filtered_level{k}.png")
-    save(plots.plot_waterfall(spectra, [row.result.scene.name for row in rows],
-                              title=f"{group}: torque spectra by load level "
-                                    f"({plan.scale} scale, DEM)"), "waterfall.png")
 
     energies = np.array([row.result.energy for row in rows])
-    spread = np.array([row.result.energy_relative_std for row in rows])
     energies_pu = per_unit(energies)
     fit = log_fit(levels, energies_pu)
-    save(plots.plot_energy_fit(levels, energies_pu, fit, label=group,
-                               errors=energies_pu * np.nan_to_num(spread)),
-         "energy_fit.png")
-    block_s = plan.block[1] - plan.block[0]
-    label = f"{group} at {plan.scale} scale"
-    calibration = Calibration(fit=fit, reference_energy=float(energies.max()), lifters=lifters,
-                              rotation_hz=rotation_hz, block_s=block_s, label=label,
-                              meta={"source": "millscope demo", "scale": plan.scale,
-                                    "levels": levels.tolist(),
-                                    "energies": energies.tolist()})
-    calibration.save(folder / "calibration.json")
-    written.append("calibration.json")
-
-    held_out = _leave_one_out(rows, levels, energies, lifters, rotation_hz, block_s)
-    mean_pu = np.array([row.result.mean_torque for row in rows])
-    mean_pu = mean_pu / mean_pu.max()
     falls = bool(np.all(np.diff(energies_pu) < 0))
-    text = _report_markdown(plan, rows, energies, energies_pu, spread, mean_pu, fit, falls,
-                            held_out, campaign_wall_s, written, lifters, rotation_hz)
-    target = folder / "report.md"
-    with atomic_write(target) as fh:
-        fh.write(text)
-    if progress:
-        print(f"millscope demo: report written to {target}")
-    return target
+    held_out = _leave_one_out(rows, levels, energies, lifters, rotation_hz,
+                              plan.block[1] - plan.block[0])
+    return _section_markdown(plan, rows, energies_pu, fit, falls, held_out, campaign_wall_s,
+                             written, lifters, rotation_hz)
 
 
 def _leave_one_out(rows: Sequence[_Row], levels: np.ndarray, energies: np.ndarray,
@@ -390,22 +381,23 @@ def _leave_one_out(rows: Sequence[_Row], levels: np.ndarray, energies: np.ndarra
     return out
 
 
-def _report_markdown(plan: DemoPlan, rows: Sequence[_Row], energies: np.ndarray,
-                     energies_pu: np.ndarray, spread: np.ndarray, mean_pu: np.ndarray,
-                     fit: LogFit, falls: bool,
-                     held_out: Sequence[tuple[float, tuple[float, float], bool]],
-                     campaign_wall_s: float, written: Sequence[str], lifters: int,
-                     rotation_hz: float) -> str:
-    group = rows[0].result.scene.name.rsplit("#", 1)[0]
+def _section_markdown(plan: DemoPlan, rows: Sequence[_Row], energies_pu: np.ndarray,
+                      fit: LogFit, falls: bool,
+                      held_out: Sequence[tuple[float, tuple[float, float], bool]],
+                      campaign_wall_s: float, written: Sequence[str], lifters: int,
+                      rotation_hz: float) -> str:
+    group = _group(rows[0].result)
     t1, t2 = plan.block
+    verdict = ("falls monotonically with the filling, as in the paper (section 6.4)"
+               if falls else
+               "does NOT fall monotonically with the filling at this scale and record length "
+               "(the paper's DEM energies do)")
     lines = [
-        f"# millscope demo: {group} #{rows[0].level}..#{rows[-1].level}, DEM at "
-        f"{plan.scale!r} scale",
+        f"## Main job: {group} #{rows[0].level}..#{rows[-1].level}, DEM at {plan.scale!r} "
+        "scale",
         "",
         "A small campaign of the paper's pilot mill simulated with millscope's DEM engine "
-        "(not synthetic data), analysed as in the paper's section 6: mean torque, lifter "
-        "torque harmonic (LTH), and the spectral energy of the torque with the mean and the "
-        "LTH removed, per unit of the largest, fitted with y = a ln(x) + b.",
+        "(not synthetic data), analysed as in the paper's section 6.",
         "",
         f"- scale `{plan.scale}`: {SCALES[plan.scale]}",
         f"- particles: {plan.particles}; speed {100 * plan.speed_fraction:g} % of critical "
@@ -413,42 +405,14 @@ def _report_markdown(plan: DemoPlan, rows: Sequence[_Row], energies: np.ndarray,
         f"{lifters * rotation_hz:.3f} Hz)",
         f"- each case: fill, settle, then {plan.duration_s:g} s of rotation sampled every 10 ms "
         f"(instantaneous torque, as the paper); the first {plan.warm_up_s:g} s are not kept; "
-        f"block {t1:g}-{t2:g} s (resolution {1 / (t2 - t1):.3g} Hz), Hann window, bands of "
-        "0.3 Hz (widened to the window's main lobe where narrower) removed around 0 Hz and "
-        "the LTH",
+        f"block {t1:g}-{t2:g} s (resolution {1 / (t2 - t1):.3g} Hz)",
         f"- seed {plan.seed}, {plan.threads} engine thread(s) per case; campaign wall time "
         f"{campaign_wall_s:.0f} s (cases already in the store are not rerun)",
         "",
-        "| case | level | particles | mean T (N m) | mean T p.u. | LTH (Hz) | LTH (N m) "
-        "| E ((N m)^2 s) | E p.u. | E spread (%) | case wall time (s) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for row, e, y, s, m in zip(rows, energies, energies_pu, spread, mean_pu, strict=True):
-        r = row.result
-        lines.append(
-            f"| {r.scene.name} | {row.level} | {r.scene.n_particles} | {r.mean_torque:.2f} "
-            f"| {m:.3f} | {r.lth_hz:.3f} | {r.lth_amplitude:.3g} | {e:.4g} | {y:.3f} "
-            f"| {100 * s:.0f} | {r.wall_time_s:.0f} |")
-    verdict = ("falls monotonically with the filling, as in the paper (section 6.4)"
-               if falls else
-               "does NOT fall monotonically with the filling at this scale and record length "
-               "(the paper's DEM energies do)")
-    lines += [
-        "",
-        "E spread: the sampling spread of each energy (standard deviation / mean); the error "
-        "bars of `energy_fit.png`.",
-        "",
         f"**Energy p.u.: {', '.join(f'{y:.3f}' for y in energies_pu)}** (levels "
-        f"{', '.join(str(row.level) for row in rows)}): the energy {verdict}.",
-        "",
-        f"Log fit (paper Table 6): {fit.equation()}, R^2 = {fit.r2:.4f}"
-        + (f" (a = {fit.a:.3f} +- {fit.a_stderr:.3f}, b = {fit.b:.3f} +- {fit.b_stderr:.3f})"
-           if fit.n > 2 else "")
-        + ". The paper's six cases have a between -0.48 and -0.41, b between 0.87 and 1.01.",
-        "",
-        "The calibration (`calibration.json`) holds this fit and the reference energy; "
-        "`millscope.estimate_fill(block, Calibration.load(...))` turns a block of "
-        f"{t2 - t1:g} s of torque of the same mill, speed and scale into a filling estimate.",
+        f"{', '.join(str(row.level) for row in rows)}): the energy {verdict}. "
+        f"Log fit: {fit.equation()}, R² = {fit.r2:.4f}. The paper's six cases have a between "
+        "-0.48 and -0.41, b between 0.87 and 1.01.",
     ]
     if held_out:
         lines += [
@@ -467,11 +431,9 @@ def _report_markdown(plan: DemoPlan, rows: Sequence[_Row], energies: np.ndarray,
         if len(rows) - 1 < MIN_LEVELS_FOR_INTERVALS:
             lines += ["", f"With {len(rows)} levels, each calibration left is fitted through "
                       f"{len(rows) - 1}: exactly (R² = 1 trivially), so it gives no interval."]
-    lines += ["", "## Figures", ""]
-    lines += [f"![{name}]({name})" for name in written if name.endswith(".png")]
-    lines += ["", "Files: " + ", ".join(f"`{name}`" for name in written)
-              + ", and the records in `store/` (one `.npz` per case, `manifest.json`).", ""]
-    return "\n".join(lines)
+    lines += ["", f"The lowest level, #{rows[0].level}: torque, spectrum, filtered signal.", ""]
+    lines += [f"![{name}]({name})" for name in written]
+    return "\n".join(lines) + "\n"
 
 
 # -- synthetic records ----------------------------------------------------------------------------

@@ -24,7 +24,7 @@ import math
 import os
 import re
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +39,7 @@ from .fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from .presets import case_key
 from .spectral import spectrum
 
-__all__ = ["write_report"]
+__all__ = ["calibration_file_name", "write_report"]
 
 REPORT_NAME = "report.md"
 
@@ -47,6 +47,12 @@ REPORT_NAME = "report.md"
 def _slug(name: str) -> str:
     """A file-name-safe form of a group's name ("LD-75%" -> "LD-75pct")."""
     return re.sub(r"[^A-Za-z0-9_-]+", "_", name.replace("%", "pct")).strip("_") or "group"
+
+
+def calibration_file_name(group: str) -> str:
+    """The file name :func:`write_report` gives the calibration of a group
+    (``"LDMS"`` -> ``"calibration_LDMS.json"``)."""
+    return f"calibration_{_slug(group)}.json"
 
 
 def _number(value: float, digits: int = 4) -> str:
@@ -161,7 +167,7 @@ def _case_table(results: list[CaseResult]) -> list[str]:
 def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | None = None, *,
                  progress: bool = True, block: tuple[float, float] | None = None,
                  bootstrap: int = 1000, confidence: float = 0.95, seed: int = 0,
-                 sub_blocks: int = 10) -> Path:
+                 sub_blocks: int = 10, sections: Sequence[str] = ()) -> Path:
     """Write the report of a campaign store (see the module docstring).
 
     Parameters
@@ -176,6 +182,9 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
         Block to analyse, s; default: as the store's campaign analysed its cases.
     bootstrap, confidence, seed, sub_blocks
         As :func:`~millscope.campaign_analysis.analyze_campaign`.
+    sections : sequence of str
+        Markdown put into the report after the Table 6 analogue, each with its own ``##``
+        heading (the main job's verdict and leave-one-out check, :mod:`millscope.demo`).
 
     Returns
     -------
@@ -188,6 +197,9 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
         before anything is written: for a path that is not a campaign store, a store without
         a finished case, or a bad argument.
     """
+    if isinstance(sections, str) or not all(isinstance(text, str) for text in sections):
+        raise ValueError(f"sections = {sections!r} is not valid; it must be a sequence of "
+                         "Markdown strings")
     campaign = Campaign.from_store(store, block=block)
     results = campaign.results()
     done = [r for r in results if r.status == "done"]
@@ -211,7 +223,7 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
     calibrations: dict[str, str] = {}
     for g in groups:
         if g.fit is not None and g.fit.n >= MIN_LEVELS_FOR_INTERVALS:
-            name = f"calibration_{_slug(g.name)}.json"
+            name = calibration_file_name(g.name)
             Calibration.from_group(g).save(target / name)
             calibrations[g.name] = name
 
@@ -253,6 +265,8 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
     else:
         lines += ["No group to analyse: no finished case has particles to grind and a load "
                   "level (balls-only cases have none).", ""]
+    for section in sections:
+        lines += [section.strip("\n"), ""]
     for g in groups:
         speed = ("" if g.speed_fraction is None
                  else f"{100 * g.speed_fraction:g} % of critical, ")
