@@ -54,7 +54,8 @@ Measured at the default dt, residual / turnover (tolerance B2): paper stiffness,
 (1 %); restitution 0.01: -2.8 % (4 %); restitution 1: +0.92 %; friction 0: +0.62 %;
 friction 1: -11.8 % (fails); drum at rest: -0.21 % (3.5 %); 150 %: -0.16 % (4.4 %); level 7
 in the small slice: -7.6 % (2.5 %, fails; +0.2 % with mu = 0); single particle: +0.009 %; no
-lifters: -0.09 %; level 7 at paper size and stiffness: -7.6 % (1 %, fails). Frictionless,
+lifters: -0.09 %. Real size (-m slow): paper stiffness -0.57 % (1 %); level 7 at paper size
+and stiffness -7.6 % (1 %, fails). Frictionless,
 halving dt twice: +0.624, +0.157, +0.039 % (e = 0.5); +0.331, +0.084, +0.021 % (e = 0.01);
 -0.063, +0.049, +0.003 % (e = 1).
 
@@ -240,7 +241,8 @@ FAST = {
 SLOW = {
     # HDMS#1 as published: 2466 balls and 4062 steel particles of 12 mm, dt 1.27 us
     "paper-stiffness-full": (presets.pilot_mill(0.71, "steel", 1, "paper"), 0.15, 0.25),
-    # LDMS#7 as published: 2466 balls and 28 434 ceramic particles, dt 2.64 us
+    # LDMS#7 as published: 2466 balls and 28 434 ceramic particles, dt 2.64 us (each of the
+    # two takes 7-9 minutes on one core)
     "level-7-full": (presets.pilot_mill(0.71, "ceramic", 7, "paper"), 0.1, 0.15),
 }
 ALL = {**FAST, **SLOW}
