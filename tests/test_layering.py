@@ -19,7 +19,7 @@ PACKAGE = Path(millscope.__file__).parent
 ANALYSIS_SIDE = ("record", "spectral", "logfit", "bootstrap", "analysis", "fit", "monitoring",
                  "drivetrain", "plots")
 SIMULATION_SIDE = {"scene", "presets", "simulation", "campaign", "campaign_analysis", "report",
-                   "contact", "studies"}
+                   "contact", "studies", "stiffness"}
 
 
 def _is_type_checking(test: ast.expr) -> bool:

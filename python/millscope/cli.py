@@ -3,7 +3,8 @@
 Subcommands: ``info`` (build facts), ``analyze`` (one torque file), ``monitor`` (a filling
 estimate per window of a long record), ``report`` (a campaign store's report), ``demo`` (the
 main job: a small DEM campaign and its report), ``bench`` (engine throughput,
-:mod:`millscope.bench`).
+:mod:`millscope.bench`), ``advise`` (contact times against dt and the torque sampling,
+:mod:`millscope.stiffness`).
 Bad input ends with one line ``millscope: error: ...`` on stderr and exit code 2.
 """
 
@@ -201,6 +202,28 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return run_from_args(args)
 
 
+def cmd_advise(args: argparse.Namespace) -> int:
+    """Stiffness advice for a preset case or a scene file (millscope.stiffness)."""
+    import json
+
+    from .presets import pilot_mill
+    from .scene import Scene
+    from .stiffness import StiffnessWarning, advise_stiffness
+
+    if args.scene is not None:
+        with open(args.scene, encoding="utf-8") as f:
+            scene = Scene.from_dict(json.load(f))
+    else:
+        particles = None if args.particles == "none" else args.particles
+        scene = pilot_mill(args.speed, particles, args.level, args.scale)
+    with warnings.catch_warnings():  # the verdict line of the report says it
+        warnings.simplefilter("ignore", StiffnessWarning)
+        advice = advise_stiffness(scene, dt=args.dt, sample_dt=args.sample_dt,
+                                  analysis_band_hz=args.band_hz, impact_speed=args.impact_speed)
+    print(advice.to_markdown() if args.markdown else advice)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="millscope",
@@ -298,6 +321,33 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=_positive_int, default=None,
                    help="parallel cases (default: cores / threads)")
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser("advise", help="stiffness advice: contact times against dt and the "
+                                      "torque sampling",
+                       description="Reports the Rayleigh time, the Hertz contact time of every "
+                                   "kind of contact at the expected impact speed, how many time "
+                                   "steps and torque samples a contact spans, and whether the "
+                                   "contact frequency 1/t_c reaches the analysis band (then the "
+                                   "torque spectrum there depends on the stiffness).")
+    p.add_argument("--scene", help="scene JSON (Scene.to_dict) instead of a preset case")
+    p.add_argument("--scale", default="paper",
+                   help="preset scale: paper, small, tiny or soft (default paper)")
+    p.add_argument("--particles", default="none",
+                   help="preset particles: ceramic, steel or none (default none: balls only)")
+    p.add_argument("--speed", type=_positive_float, default=0.71,
+                   help="preset speed, fraction of critical (default 0.71)")
+    p.add_argument("--level", type=_positive_int, default=1,
+                   help="preset load level 1..7 (default 1)")
+    p.add_argument("--dt", type=_positive_float, default=None,
+                   help="time step, s (default 0.2 x the smallest Rayleigh time)")
+    p.add_argument("--sample-dt", type=_positive_float, default=0.01,
+                   help="torque sampling interval, s (default 0.01)")
+    p.add_argument("--band-hz", type=_positive_float, default=None,
+                   help="analysis band 0..BAND_HZ, Hz (default the Nyquist frequency)")
+    p.add_argument("--impact-speed", type=_positive_float, default=None,
+                   help="impact speed, m/s (default: from the scene, see millscope.stiffness)")
+    p.add_argument("--markdown", action="store_true", help="print Markdown")
+    p.set_defaults(func=cmd_advise)
 
     from .bench import add_arguments as add_bench_arguments
 

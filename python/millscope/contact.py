@@ -5,9 +5,10 @@ eqs. 1-8; DESIGN.md section 2), implemented in C++ (``cpp/include/millscope/cont
 This module exposes it for checks and advice:
 
 - :func:`pair_properties`: E*, G*, R*, m*, beta of a pair of bodies;
-- :func:`rayleigh_time`, :func:`hertz_contact_time`, :func:`hertz_max_overlap`: time-step
-  criteria (the engine's default step is ``DEFAULT_DT_FRACTION`` x the smallest Rayleigh time and
-  it refuses steps above ``MAX_DT_FRACTION`` x that time);
+- :func:`rayleigh_time`, :func:`hertz_contact_time`, :func:`hertz_max_overlap`,
+  :func:`hertz_stability_dt`: time-step criteria (the engine's default step is
+  ``DEFAULT_DT_FRACTION`` x the smallest Rayleigh time and it refuses steps above
+  ``MAX_DT_FRACTION`` x that time; :mod:`millscope.stiffness` applies them to a scene);
 - :func:`impact`: one collision of two spheres, or of a sphere and a flat wall, integrated with
   the engine's law and integrator (velocity Verlet, damping on half-step velocities). It reports
   the restitution obtained, the contact duration, the largest overlap and the state after the
@@ -37,6 +38,7 @@ __all__ = [
     "PairProperties",
     "hertz_contact_time",
     "hertz_max_overlap",
+    "hertz_stability_dt",
     "impact",
     "pair_properties",
     "rayleigh_time",
@@ -259,6 +261,19 @@ def hertz_max_overlap(material_a: MaterialLike, material_b: MaterialLike | None,
     p = pair_properties(material_a, material_b, diameter_a, diameter_b)
     return float(_core.hertz_max_overlap(p.m_star, p.r_star, p.e_star,
                                          _positive(speed, "speed", "m/s")))
+
+
+def hertz_stability_dt(material_a: MaterialLike, material_b: MaterialLike | None,
+                       diameter_a: float, diameter_b: float | None, speed: float) -> float:
+    """Velocity-Verlet stability limit of an elastic head-on Hertz impact, dt = 2 / w_max, s.
+
+    w_max^2 = S_n(d_max) / m* = 2 E* sqrt(R* d_max) / m* is the contact's highest angular
+    frequency, at its largest overlap (eq. 4; ``cpp/include/millscope/timestep.hpp``). Velocity
+    Verlet on a spring of angular frequency w is stable for dt < 2 / w.
+    """
+    p = pair_properties(material_a, material_b, diameter_a, diameter_b)
+    return float(_core.hertz_stability_dt(p.m_star, p.r_star, p.e_star,
+                                          _positive(speed, "speed", "m/s")))
 
 
 @dataclass(frozen=True)

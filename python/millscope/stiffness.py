@@ -1,0 +1,428 @@
+"""Stiffness advisor: how a scene's contact stiffness meets its time step and its torque sampling.
+
+An impact lasts about the Hertz contact time t_c. The engine must resolve it in several time
+steps, and the torque analysis must not resolve it: an impact's force pulse carries frequencies
+up to about 1/t_c, so as long as 1/t_c lies far above the analysis band (0 .. the Nyquist
+frequency of the torque samples, 50 Hz for the paper's 10 ms samples) the band sees each impact
+as an impulse, whatever the stiffness. Once 1/t_c reaches the band, the band resolves the
+pulses' shape and the torque spectrum there depends on the stiffness chosen; a reduced shear
+modulus lengthens t_c as G^(-2/5) (eq. A2). :func:`advise_stiffness` reports, for a scene:
+
+- the Rayleigh time, the smallest over the charge (the engine's default dt is 0.2 x it)::
+
+      T_R = pi r sqrt(rho / G) / (0.1631 nu + 0.8766)                                    (A1)
+
+- the expected impact speed v (A3-A5 below);
+- for every pair of fractions and every fraction against the drum: the elastic Hertz contact
+  time at v, its frequency 1/t_c, how many time steps and torque samples it spans, the same
+  contact integrated with the engine's law at dt and the pair's restitution
+  (:func:`millscope.contact.impact`), the largest overlap over the radius, and the margin of dt
+  below the contact's stability limit 2/w_max at the upper speed (A6)::
+
+      t_c = 2.87 (m*^2 / (R* E*^2 v))^(1/5)                                             (A2)
+
+- a :class:`StiffnessWarning` when 1/t_c of some pair reaches the analysis band.
+
+**Expected impact speed.** In the cataracting regime, 0 < w^2 R_p / g < 1 (w the drum's angular
+speed, R_p = R - d_max/2 the radius of the outer layer's centres), a particle carried up at the
+drum's speed w R_p leaves the shell where the normal force vanishes, at the angle alpha above
+the horizontal, and flies a parabola back onto the shell (the Davis trajectory). Its landing
+speed, from the parabola's second crossing of the circle (flight time 4 w R_p cos(alpha) / g)::
+
+      sin(alpha) = w^2 R_p / g                                                          (A3)
+      v = w R_p sqrt(1 + 8 cos^2(alpha))                                                (A4)
+
+3.84 m/s in the paper's mill at 71 % of critical. With the drum at rest, or at or above the
+critical speed (no cataract), the charge has no steady impacts to speak of and v is the upper
+estimate::
+
+      v = sqrt(2 g D)                                                                    (A5)
+
+the speed of a free fall across the drum, which bounds A4 (whose largest value, at
+sin(alpha) = sqrt(3/8), is 1.92 sqrt(g R_p) < 2 sqrt(g R)) and the transients (the filling drop,
+the spin-up). The whole landing speed enters A2, not only its normal part: that errs towards
+shorter contacts, slightly (t_c ~ v^(-1/5)). The stability margin takes the largest relative
+speed a particle can reach, a fall across the drum onto a lifter moving at the rim speed::
+
+      v_max = sqrt(2 g D) + w R                                                         (A6)
+
+:func:`advise_stiffness` takes the speed as ``impact_speed`` when the caller knows better.
+
+Lives beside :mod:`millscope.contact` rather than in it: it reads a :class:`~millscope.scene.Scene`
+(fractions, pairs, drum, speed) and sampling settings, while ``contact`` is the contact law on
+its own and is imported by ``scene``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from numbers import Real
+
+from .contact import (
+    DEFAULT_DT_FRACTION,
+    MAX_DT_FRACTION,
+    PairProperties,
+    hertz_contact_time,
+    hertz_max_overlap,
+    hertz_stability_dt,
+    impact,
+    pair_properties,
+)
+from .scene import Fraction, Scene
+
+__all__ = [
+    "ContactAdvice",
+    "StiffnessAdvice",
+    "StiffnessWarning",
+    "advise_stiffness",
+    "expected_impact_speed",
+    "upper_impact_speed",
+]
+
+WALL = "wall"  # the name of the drum in pair labels
+
+
+class StiffnessWarning(UserWarning):
+    """A contact's frequency content (about 1 / contact time) reaches the analysis band."""
+
+
+@dataclass(frozen=True)
+class ContactAdvice:
+    """One kind of contact of a scene at the expected impact speed.
+
+    Attributes
+    ----------
+    label : str
+        ``"<fraction>-<fraction>"`` or ``"<fraction>-wall"``.
+    fraction_a, fraction_b : str
+        Fraction names; ``fraction_b`` is ``"wall"`` for the drum.
+    pair : PairProperties
+        E*, G*, R*, m*, beta, restitution and friction of the contact.
+    speed : float
+        Normal approach speed assumed, m/s.
+    contact_time : float
+        Elastic Hertz contact time at ``speed`` (A2), s.
+    integrated_contact_time : float
+        The same impact integrated with the engine's law and integrator at ``dt``, with the
+        pair's restitution and friction, s (damping lengthens it); NaN when
+        ``contact_time <= dt`` (nothing to integrate).
+    integrated_steps : int
+        Steps that integrated impact spanned (0 when ``contact_time <= dt``).
+    max_overlap : float
+        Largest overlap of the elastic impact over the smaller radius (dimensionless).
+    stability_dt : float
+        2 / w_max of an elastic impact at the upper speed v_max (A6), s.
+    dt, sample_dt : float
+        Time step and torque sampling interval, s.
+    """
+
+    label: str
+    fraction_a: str
+    fraction_b: str
+    pair: PairProperties
+    speed: float
+    contact_time: float
+    integrated_contact_time: float
+    integrated_steps: int
+    max_overlap: float
+    stability_dt: float
+    dt: float
+    sample_dt: float
+
+    @property
+    def contact_hz(self) -> float:
+        """1 / contact_time, Hz: about where the impact's frequency content ends."""
+        return 1.0 / self.contact_time
+
+    @property
+    def steps_per_contact(self) -> float:
+        """contact_time / dt."""
+        return self.contact_time / self.dt
+
+    @property
+    def samples_per_contact(self) -> float:
+        """contact_time / sample_dt (well below 1 when the samples cannot see an impact)."""
+        return self.contact_time / self.sample_dt
+
+    @property
+    def stability_margin(self) -> float:
+        """stability_dt / dt: how far dt stays below the contact's stability limit."""
+        return self.stability_dt / self.dt
+
+
+@dataclass(frozen=True)
+class StiffnessAdvice:
+    """What :func:`advise_stiffness` found. ``str()`` gives a plain-text report,
+    :meth:`to_markdown` a Markdown one.
+
+    Attributes
+    ----------
+    scene_name : str
+    rayleigh_time : float
+        Smallest Rayleigh time of the charge (A1), s.
+    rayleigh_fraction : str
+        The fraction that has it.
+    dt : float
+        Time step, s.
+    sample_dt : float
+        Torque sampling interval, s.
+    analysis_band_hz : float
+        Upper end of the analysis band, Hz.
+    band_is_nyquist : bool
+        Whether the band is the Nyquist frequency 1 / (2 sample_dt) (no band given).
+    impact_speed : float
+        Expected impact speed, m/s.
+    impact_speed_basis : str
+        How it was obtained (A4, A5, or given).
+    upper_speed : float
+        v_max of A6, m/s.
+    contacts : tuple of ContactAdvice
+        Every pair of fractions, then every fraction against the drum.
+    """
+
+    scene_name: str
+    rayleigh_time: float
+    rayleigh_fraction: str
+    dt: float
+    sample_dt: float
+    analysis_band_hz: float
+    band_is_nyquist: bool
+    impact_speed: float
+    impact_speed_basis: str
+    upper_speed: float
+    contacts: tuple[ContactAdvice, ...]
+
+    @property
+    def dt_fraction(self) -> float:
+        """dt / rayleigh_time."""
+        return self.dt / self.rayleigh_time
+
+    @property
+    def longest(self) -> ContactAdvice:
+        """The contact of the lowest frequency (the first to reach the band)."""
+        return max(self.contacts, key=lambda c: c.contact_time)
+
+    @property
+    def shortest(self) -> ContactAdvice:
+        """The contact of the fewest steps."""
+        return min(self.contacts, key=lambda c: c.contact_time)
+
+    @property
+    def reaching_band(self) -> tuple[ContactAdvice, ...]:
+        """The contacts whose frequency 1 / t_c is at or below the analysis band's upper end."""
+        return tuple(c for c in self.contacts if c.contact_hz <= self.analysis_band_hz)
+
+    @property
+    def band_margin(self) -> float:
+        """Lowest contact frequency / analysis band (<= 1: a warning)."""
+        return self.longest.contact_hz / self.analysis_band_hz
+
+    def _band_text(self) -> str:
+        source = "the Nyquist frequency" if self.band_is_nyquist else "given"
+        return f"0 .. {self.analysis_band_hz:.4g} Hz ({source})"
+
+    def verdict(self) -> str:
+        """One sentence: whether the contacts' frequency content stays out of the band."""
+        low = self.longest
+        if self.reaching_band:
+            labels = ", ".join(c.label for c in self.reaching_band)
+            return (f"WARNING: the contact frequency 1/t_c of {labels} (lowest "
+                    f"{low.contact_hz:.4g} Hz, {low.label}) reaches the analysis band "
+                    f"{self._band_text()}: the torque spectrum there depends on the stiffness. "
+                    "Raise the shear modulus (a stiffer scale) or analyse a narrower band.")
+        return (f"ok: the lowest contact frequency, {low.contact_hz:.4g} Hz ({low.label}), is "
+                f"{self.band_margin:.3g} x the analysis band {self._band_text()}; the shortest "
+                f"contact spans {self.shortest.steps_per_contact:.3g} steps.")
+
+    def _rows(self) -> list[list[str]]:
+        return [[c.label, f"{c.pair.restitution:g}", f"{c.contact_time:.4g}",
+                 f"{c.contact_hz:.4g}", f"{c.steps_per_contact:.1f}", str(c.integrated_steps),
+                 f"{c.samples_per_contact:.3g}", f"{100.0 * c.max_overlap:.3g}",
+                 f"{c.stability_margin:.2f}"] for c in self.contacts]
+
+    _HEADER = ("contact", "e", "t_c (s)", "1/t_c (Hz)", "steps", "steps (engine)",
+               "samples", "overlap (% r)", "stability margin")
+
+    def _facts(self) -> list[str]:
+        return [
+            f"Rayleigh time {self.rayleigh_time:.4g} s (fraction {self.rayleigh_fraction!r}); "
+            f"dt = {self.dt:.4g} s = {self.dt_fraction:.3g} x the Rayleigh time",
+            f"torque samples every {self.sample_dt:g} s; analysis band {self._band_text()}",
+            f"impact speed {self.impact_speed:.3g} m/s: {self.impact_speed_basis}",
+            f"stability margins at the upper speed {self.upper_speed:.3g} m/s (A6)",
+        ]
+
+    def __str__(self) -> str:
+        rows = [list(self._HEADER), *self._rows()]
+        widths = [max(len(r[k]) for r in rows) for k in range(len(self._HEADER))]
+        table = ["  " + "  ".join(cell.rjust(w) if k else cell.ljust(w)
+                                  for k, (cell, w) in enumerate(zip(r, widths, strict=True)))
+                 for r in rows]
+        return "\n".join([f"stiffness advice: {self.scene_name or 'scene'}",
+                          *("  " + f for f in self._facts()), *table, self.verdict()])
+
+    def to_markdown(self) -> str:
+        """A Markdown section: the facts, the table of contacts and the verdict."""
+        lines = [f"### Stiffness advice: {self.scene_name or 'scene'}", ""]
+        lines += [f"- {f}" for f in self._facts()]
+        lines += ["", "| " + " | ".join(self._HEADER) + " |",
+                  "|" + "---|" * len(self._HEADER)]
+        lines += ["| " + " | ".join(r) + " |" for r in self._rows()]
+        lines += ["", ("**" + self.verdict() + "**") if self.reaching_band else self.verdict()]
+        lines += ["", "steps: t_c / dt; steps (engine): the impact integrated with the engine's "
+                  "law at dt and the pair's restitution; samples: t_c / sample_dt; stability "
+                  "margin: (2 / w_max at the upper speed) / dt."]
+        return "\n".join(lines)
+
+
+# -- speeds ------------------------------------------------------------------------------------
+
+
+def expected_impact_speed(scene: Scene) -> tuple[float, str]:
+    """The expected impact speed of a scene, m/s, and how it was obtained (module docstring).
+
+    Cataracting (0 < w^2 R_p / g < 1): the Davis landing speed, A3-A4. Otherwise: the free-fall
+    speed across the drum, sqrt(2 g D) (A5).
+    """
+    _require_scene(scene)
+    g, omega = scene.gravity, scene.omega
+    r_p = scene.drum.radius - 0.5 * scene.max_diameter  # the outer layer's centres, m
+    sin_alpha = omega * omega * r_p / g  # (A3)
+    if 0.0 < sin_alpha < 1.0:
+        speed = omega * r_p * math.sqrt(1.0 + 8.0 * (1.0 - sin_alpha**2))  # (A4)
+        alpha_deg = math.degrees(math.asin(sin_alpha))
+        return speed, (f"cataracting, the Davis landing speed (A3-A4; leaving the shell "
+                       f"{alpha_deg:.3g} deg above the horizontal)")
+    regime = "drum at rest" if omega == 0.0 else "at or above critical speed, no cataract"
+    return math.sqrt(2.0 * g * scene.drum.diameter), f"{regime}: free fall across the drum (A5)"
+
+
+def upper_impact_speed(scene: Scene) -> float:
+    """v_max = sqrt(2 g D) + w R (A6), m/s: a fall across the drum onto a lifter at rim speed."""
+    _require_scene(scene)
+    return math.sqrt(2.0 * scene.gravity * scene.drum.diameter) + scene.omega * scene.drum.radius
+
+
+# -- the advisor -------------------------------------------------------------------------------
+
+
+def advise_stiffness(scene: Scene, *, dt: float | None = None, sample_dt: float = 0.01,
+                     analysis_band_hz: float | None = None,
+                     impact_speed: float | None = None) -> StiffnessAdvice:
+    """Contact times of a scene against its time step and its torque sampling.
+
+    Parameters
+    ----------
+    scene : Scene
+    dt : float, optional
+        Time step, s, in (0, MAX_DT_FRACTION x the smallest Rayleigh time]; default
+        DEFAULT_DT_FRACTION x that time (the engine's default).
+    sample_dt : float
+        Torque sampling interval, s, >= dt (0.01 s in the paper).
+    analysis_band_hz : float, optional
+        Upper end of the analysis band, Hz, in (0, 1 / (2 sample_dt)]; default the Nyquist
+        frequency 1 / (2 sample_dt).
+    impact_speed : float, optional
+        Normal approach speed of the impacts, m/s, > 0; default :func:`expected_impact_speed`.
+
+    Returns
+    -------
+    StiffnessAdvice
+
+    Warns
+    -----
+    StiffnessWarning
+        When 1 / t_c of some contact is at or below ``analysis_band_hz``.
+
+    Raises
+    ------
+    ValueError
+        A bad argument, naming it, its value and the valid range.
+    """
+    _require_scene(scene)
+    t_rayleigh, stiffest = scene.min_rayleigh_time()
+    limit = MAX_DT_FRACTION * t_rayleigh
+    if dt is None:
+        dt = DEFAULT_DT_FRACTION * t_rayleigh
+    else:
+        dt = _in_range("dt", dt, "s", 0.0, limit,
+                       f"in (0, {limit:.6g}] s, {MAX_DT_FRACTION} x the Rayleigh time "
+                       f"{t_rayleigh:.6g} s of the fraction {stiffest!r}")
+    sample_dt = _in_range("sample_dt", sample_dt, "s", dt, math.inf,
+                          f">= the time step dt = {dt:.6g} s", low_open=False)
+    nyquist = 0.5 / sample_dt
+    band_is_nyquist = analysis_band_hz is None
+    band = nyquist if analysis_band_hz is None else _in_range(
+        "analysis_band_hz", analysis_band_hz, "Hz", 0.0, nyquist,
+        f"in (0, {nyquist:.6g}] Hz, the Nyquist frequency of sample_dt = {sample_dt:g} s")
+    if impact_speed is None:
+        speed, basis = expected_impact_speed(scene)
+    else:
+        speed = _in_range("impact_speed", impact_speed, "m/s", 0.0, math.inf, "> 0 m/s")
+        basis = "given"
+    v_max = max(upper_impact_speed(scene), speed)
+
+    contacts = tuple(_contact(scene, a, b, speed, v_max, dt, sample_dt)
+                     for a, b in _contact_kinds(scene))
+    advice = StiffnessAdvice(
+        scene_name=scene.name, rayleigh_time=t_rayleigh, rayleigh_fraction=stiffest, dt=dt,
+        sample_dt=sample_dt, analysis_band_hz=band, band_is_nyquist=band_is_nyquist,
+        impact_speed=speed, impact_speed_basis=basis, upper_speed=v_max, contacts=contacts)
+    if advice.reaching_band:
+        warnings.warn(advice.verdict(), StiffnessWarning, stacklevel=2)
+    return advice
+
+
+def _contact_kinds(scene: Scene) -> list[tuple[Fraction, Fraction | None]]:
+    """Every unordered pair of fractions (charge order), then every fraction with the drum."""
+    charge = scene.charge
+    pairs: list[tuple[Fraction, Fraction | None]] = [
+        (a, b) for i, a in enumerate(charge) for b in charge[i:]]
+    return pairs + [(a, None) for a in charge]
+
+
+def _contact(scene: Scene, a: Fraction, b: Fraction | None, speed: float, v_max: float,
+             dt: float, sample_dt: float) -> ContactAdvice:
+    """One contact kind: b None is the drum (a flat wall of the drum's material)."""
+    mat_a = scene.material(a.material)
+    mat_b = scene.material(scene.drum.material if b is None else b.material)
+    coeff = scene.pair(a.material, mat_b.name)
+    d_b = None if b is None else b.diameter
+    pair = pair_properties(mat_a, mat_b, a.diameter, d_b, coeff.restitution, coeff.friction)
+    t_c = hertz_contact_time(mat_a, mat_b, a.diameter, d_b, speed)  # (A2)
+    if t_c > dt:
+        hit = impact(mat_a, mat_b, a.diameter, d_b, speed, coeff.restitution, coeff.friction, dt)
+        integrated_time, integrated_steps = hit.contact_time, hit.contact_steps
+    else:  # the contact is over within one step: nothing to integrate
+        integrated_time, integrated_steps = math.nan, 0
+    r_small = a.radius if b is None else min(a.radius, b.radius)
+    return ContactAdvice(
+        label=f"{a.name}-{WALL if b is None else b.name}", fraction_a=a.name,
+        fraction_b=WALL if b is None else b.name, pair=pair, speed=speed, contact_time=t_c,
+        integrated_contact_time=integrated_time, integrated_steps=integrated_steps,
+        max_overlap=hertz_max_overlap(mat_a, mat_b, a.diameter, d_b, speed) / r_small,
+        stability_dt=hertz_stability_dt(mat_a, mat_b, a.diameter, d_b, v_max), dt=dt,
+        sample_dt=sample_dt)
+
+
+# -- validation --------------------------------------------------------------------------------
+
+
+def _require_scene(scene: object) -> None:
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene = {type(scene).__name__} is not valid; it must be a millscope "
+                         "Scene (millscope.presets.pilot_mill builds the paper's)")
+
+
+def _in_range(name: str, value: object, unit: str, low: float, high: float, valid: str, *,
+              low_open: bool = True) -> float:
+    """``value`` as float if finite and in (low, high] (or [low, high]); else ValueError
+    ``"<name> = <value> <unit> is not valid; it must be <valid>"``."""
+    ok = isinstance(value, Real) and not isinstance(value, bool)
+    x = float(value) if ok else math.nan  # type: ignore[arg-type]
+    inside = (x > low if low_open else x >= low) and x <= high
+    if not (math.isfinite(x) and inside):
+        raise ValueError(f"{name} = {value!r} {unit} is not valid; it must be {valid}")
+    return x
