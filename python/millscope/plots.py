@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, NullFormatter
 from numpy.typing import ArrayLike, NDArray
 
 from ._files import atomic_write
@@ -792,6 +793,10 @@ def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = 
             ax.annotate(_knob_changes(p.setting, reference), (p.cost, 100.0 * p.error),
                         xytext=(5, 4), textcoords="offset points", fontsize="x-small")
     ax.set_xscale("log")
+    plain = FuncFormatter(lambda value, _: f"{value:g}")
+    ax.xaxis.set_major_formatter(plain)
+    # within about a decade the log axis has no major tick: label the minor ones plainly
+    ax.xaxis.set_minor_formatter(plain if x.max() < 30.0 * x.min() else NullFormatter())
     ax.set_ylim(bottom=0.0)
     ax.set_xlabel(_COST_NAMES.get(cost, cost))
     ax.set_ylabel(f"|error| of the {_QUANTITY_NAMES.get(quantity, quantity)} (%)")
