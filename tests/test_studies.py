@@ -319,7 +319,7 @@ def test_the_figure_marks_the_front_and_the_reference() -> None:
     # the front joins (1, 20 %), (10, 3 %), (100, 0 %); (20, 5 %) is dominated
     assert list(front.get_xdata()) == [1.0, 10.0, 100.0]
     assert list(front.get_ydata()) == pytest.approx([20.0, 3.0, 0.0])
-    assert {t.get_text() for t in ax.texts} >= {"reference", "dt_fraction 0.02"}
+    assert {t.get_text() for t in ax.texts} >= {"reference", "dt 0.02 T_R"}
     with pytest.raises(ValueError, match="slope a needs 2 or more load levels"):
         plots.plot_accuracy(StudyResult(tuple(dataclasses.replace(
             r, quantities={**r.quantities, "slope_a": QuantityError(*[math.nan] * 5)})

@@ -729,11 +729,17 @@ _QUANTITY_NAMES = {"mean_torque": "mean torque", "energy": "spectral energy",
 _COST_NAMES = {"wall_s": "wall-clock time per run (s)", "particle_steps": "particle-steps per run"}
 
 
+_KNOB_FORMATS = {"dt_fraction": "dt {} T_R", "shear_modulus_factor": "G x{}",
+                 "record_s": "block {} s", "warm_up_s": "warm-up {} s", "sampling": "{} samples",
+                 "scale": "{} scale"}
+
+
 def _knob_changes(setting: Any, reference: Any) -> str:
-    """What a setting changes from the reference, e.g. ``"dt_fraction 0.4"``."""
+    """What a setting changes from the reference, e.g. ``"dt 0.4 T_R, block 2 s"``."""
     ref, own = reference.to_dict(), setting.to_dict()
-    changed = [f"{k} {'scale' if v is None else format(v, 'g') if isinstance(v, float) else v}"
-               for k, v in own.items() if v != ref[k]]
+    changed = [_KNOB_FORMATS.get(k, k + " {}").format(
+        "of scale" if v is None else format(v, "g") if isinstance(v, float) else v)
+        for k, v in own.items() if v != ref[k]]
     return ", ".join(changed) or "reference"
 
 
