@@ -458,21 +458,22 @@ def test_the_command_line_reuses_the_store_and_writes_the_table(tiny_study, caps
 
 
 @pytest.mark.slow
-def test_the_cheap_end_of_a_dt_ladder_errs_more(tmp_path) -> None:
-    """0.1, 0.25 and 0.5 Rayleigh times, 4 seeds, a 3 s block after 1.5 s: the particle-steps
-    fall as 1 / dt, and the mean torque errs more at the largest step than at the middle one,
-    by more than 2 standard errors of their difference. (With 1 s blocks the dt bias, a few
-    %, is within the seed noise of the tiny slice.)"""
-    ladder = (0.1, 0.25, 0.5)
+def test_a_dt_ladder_within_the_limit_keeps_the_mean_torque_within_5_percent(tmp_path) -> None:
+    """0.05, 0.1 and 0.5 Rayleigh times, 4 seeds, a 3 s block after 1.5 s: the rotation's
+    particle-steps fall as 1 / dt, and up to the engine's limit the mean torque stays within
+    5 % of the smallest step's. (Measured: +2.0 % and -0.5 %, standard errors 1.2 % and
+    1.0 %: at the tiny scale no dt bias of the mean torque is resolved beyond the seed noise,
+    so this checks a bound, not an ordering along the ladder.)"""
+    ladder = (0.05, 0.1, 0.5)
     base = Setting(record_s=3.0, warm_up_s=1.5, sampling="instant")
     plan = StudyPlan.ladder("dt_fraction", ladder, base=base, seeds=(0, 1, 2, 3))
     result = run_study(plan, tmp_path / "store", max_workers=2, progress=False)
     rows = {r.setting.dt_fraction: r for r in result.rows}
     rotation = [rows[f].n_particles * base.duration_s / rows[f].dt_s for f in ladder]
     assert rotation == pytest.approx([rotation[0] * ladder[0] / f for f in ladder])
-    mid, cheap = (rows[f].quantities["mean_torque"] for f in ladder[1:])
-    noise = math.sqrt((mid.spread**2 + cheap.spread**2) / 4)
-    assert abs(cheap.error) - abs(mid.error) > 2.0 * noise, (mid, cheap)
+    for f in ladder[1:]:
+        e = rows[f].quantities["mean_torque"]
+        assert abs(e.error) < 0.05, (f, e)
 
 
 @pytest.mark.slow
