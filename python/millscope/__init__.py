@@ -6,7 +6,7 @@ The public API (DESIGN.md section 5) is re-exported here; submodules hold the de
 from importlib import import_module as _import_module
 from typing import Any as _Any
 
-from . import campaign, contact, drivetrain, presets
+from . import campaign, contact, drivetrain, presets, studies
 from ._core import build_info as _build_info
 from .campaign import Campaign, Case, CaseResult, RunSettings
 from .campaign_analysis import GroupAnalysis, analyze_campaign
@@ -26,6 +26,7 @@ from .spectral import (
     spectrum,
     window_factors,
 )
+from .studies import StudyPlan, StudyResult, run_study
 
 __version__: str = _build_info()["version"]
 
@@ -59,6 +60,8 @@ __all__ = [
     "RunSettings",
     "SpectralEnergy",
     "Spectrum",
+    "StudyPlan",
+    "StudyResult",
     "TorqueRecord",
     "WindowEstimate",
     "__version__",
@@ -75,7 +78,9 @@ __all__ = [
     "plots",
     "presets",
     "report",
+    "run_study",
     "spectral_energy",
     "spectrum",
+    "studies",
     "window_factors",
 ]

@@ -4,7 +4,8 @@ Subcommands: ``info`` (build facts), ``analyze`` (one torque file), ``monitor`` 
 estimate per window of a long record), ``report`` (a campaign store's report), ``demo`` (the
 main job: a small DEM campaign and its report), ``bench`` (engine throughput,
 :mod:`millscope.bench`), ``advise`` (contact times against dt and the torque sampling,
-:mod:`millscope.stiffness`).
+:mod:`millscope.stiffness`), ``study accuracy`` (error against run time of the engine's
+settings, :mod:`millscope.studies`).
 Bad input ends with one line ``millscope: error: ...`` on stderr and exit code 2.
 """
 
@@ -195,6 +196,53 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+_STUDY_LADDERS = (("dt_fraction", "vary_dt_fraction"), ("shear_modulus_factor", "vary_shear"),
+                  ("record_s", "vary_record"), ("warm_up_s", "vary_warm_up"),
+                  ("sampling", "vary_sampling"), ("scale", "vary_scale"))
+
+
+def cmd_study_accuracy(args: argparse.Namespace) -> int:
+    """Error against run time: a reference setting and one-knob ladders around it."""
+    from .studies import Setting, StudyPlan, run_study
+
+    reference = Setting(dt_fraction=args.dt_fraction, shear_modulus_factor=args.shear,
+                        record_s=args.record, warm_up_s=args.warm_up, sampling=args.sampling,
+                        scale=args.scale)
+    ladders = {knob: getattr(args, option) for knob, option in _STUDY_LADDERS
+               if getattr(args, option)}
+    if not ladders:
+        raise CliError("give at least one ladder: --vary-dt-fraction, --vary-shear, "
+                       "--vary-record, --vary-warm-up, --vary-sampling or --vary-scale")
+    if args.quantity == "slope_a" and len(set(args.levels)) < 2:
+        raise CliError("--quantity slope_a needs 2 or more --levels (and --particles)")
+    plan = StudyPlan.around(reference, ladders, seeds=tuple(range(args.seeds)),
+                            speed_fraction=args.speed,
+                            particles=None if args.particles == "none" else args.particles,
+                            load_levels=tuple(args.levels), threads=args.threads,
+                            combine=args.combine)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CliError(f"--out {str(out)!r} is not valid; it must be a folder")
+    runs = len(plan.cases())
+    print(f"millscope study accuracy: {len(plan.settings)} settings x {len(plan.load_levels)} "
+          f"level(s) x {len(plan.seeds)} seeds = {runs} runs, {args.workers} at a time on "
+          f"{plan.threads} engine thread(s); store {out / 'store'}", flush=True)
+    try:
+        result = run_study(plan, out / "store", max_workers=args.workers,
+                           progress=not args.no_progress)
+    except RuntimeError as exc:  # a failed run: reported in one line, finished runs kept
+        raise CliError(str(exc)) from None
+    except KeyboardInterrupt:
+        print(f"millscope: interrupted; the finished runs are kept in {out / 'store'} and a "
+              "rerun goes on from there", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    written = result.write(out, quantity=args.quantity)
+    print(result.to_markdown(args.quantity))
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     """Engine throughput on the pilot mill (millscope.bench)."""
     from .bench import run_from_args
@@ -348,6 +396,59 @@ def build_parser() -> argparse.ArgumentParser:
                    help="impact speed, m/s (default: from the scene, see millscope.stiffness)")
     p.add_argument("--markdown", action="store_true", help="print Markdown")
     p.set_defaults(func=cmd_advise)
+
+    p = sub.add_parser("study", help="studies of the engine's settings (study accuracy)")
+    studies = p.add_subparsers(dest="study", required=True)
+    p = studies.add_parser(
+        "accuracy", help="error against run time of the speed-up knobs",
+        description="Runs the pilot mill at a reference setting and at one-knob ladders around "
+                    "it (time step, stiffness, record length, warm-up, sampling, scale), each "
+                    "with several seeds, through a campaign store (a rerun reuses finished "
+                    "runs); writes accuracy.csv, accuracy.md and accuracy.png (error against "
+                    "wall time with the Pareto front) into --out and prints the table.")
+    p.add_argument("--out", default="out/study-accuracy",
+                   help="output folder; the runs go to OUT/store (default out/study-accuracy)")
+    p.add_argument("--particles", default="none", choices=["none", "ceramic", "steel"],
+                   help="particles to grind (default none: balls only)")
+    p.add_argument("--speed", type=_positive_float, default=0.71,
+                   help="fraction of critical speed (default 0.71)")
+    p.add_argument("--levels", type=_positive_int, nargs="+", default=[1],
+                   help="load levels of Table 5 (default 1; 2 or more add the log-fit slope a)")
+    p.add_argument("--seeds", type=_positive_int, default=3,
+                   help="filling seeds per setting, 0..SEEDS-1, at least 2 (default 3)")
+    group = p.add_argument_group("the reference setting")
+    group.add_argument("--dt-fraction", type=float, default=0.1,
+                       help="time step / Rayleigh time, in (0, 0.5] (default 0.1)")
+    group.add_argument("--shear", type=float, default=None,
+                       help="shear moduli as a fraction of the paper's, in (0, 1] "
+                            "(default: the scale's own)")
+    group.add_argument("--record", type=float, default=4.0,
+                       help="analysed block, s (default 4)")
+    group.add_argument("--warm-up", type=float, default=2.0,
+                       help="rotation before the block, s (default 2)")
+    group.add_argument("--sampling", default="mean", choices=["instant", "mean"],
+                       help="torque sampling (default mean, anti-aliased)")
+    group.add_argument("--scale", default="tiny",
+                       help="scale of millscope.presets.SCALES (default tiny)")
+    group = p.add_argument_group("the ladders: other values of one knob each")
+    group.add_argument("--vary-dt-fraction", type=float, nargs="+", metavar="F")
+    group.add_argument("--vary-shear", type=float, nargs="+", metavar="G")
+    group.add_argument("--vary-record", type=float, nargs="+", metavar="S")
+    group.add_argument("--vary-warm-up", type=float, nargs="+", metavar="S")
+    group.add_argument("--vary-sampling", nargs="+", choices=["instant", "mean"])
+    group.add_argument("--vary-scale", nargs="+", metavar="SCALE")
+    group.add_argument("--combine", action="store_true",
+                       help="also run the cheapest value of every ladder together")
+    p.add_argument("--quantity", default="energy",
+                   choices=["mean_torque", "energy", "lth_amplitude", "slope_a"],
+                   help="the error plotted and whose Pareto front is marked (default energy)")
+    p.add_argument("--threads", type=_positive_int, default=1,
+                   help="engine threads per run (default 1)")
+    p.add_argument("--workers", type=_positive_int, default=1,
+                   help="runs at a time (default 1, so that their wall times do not disturb "
+                        "each other)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_study_accuracy)
 
     from .bench import add_arguments as add_bench_arguments
 

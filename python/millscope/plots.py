@@ -17,11 +17,12 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, NullFormatter
 from numpy.typing import ArrayLike, NDArray
 
 from ._files import atomic_write
@@ -29,9 +30,12 @@ from .fit import LogFit
 from .record import TorqueRecord
 from .spectral import Spectrum
 
+if TYPE_CHECKING:  # the figures stay below the simulation side (DESIGN.md section 1)
+    from .studies import StudyResult
+
 __all__ = ["plot_torque", "plot_spectrum", "plot_filtered", "plot_waterfall",
            "plot_spectra_grid", "plot_torque_levels", "plot_lth_levels", "plot_energy_levels",
-           "plot_energy_fit", "plot_energy_fits", "save_figure"]
+           "plot_energy_fit", "plot_energy_fits", "plot_accuracy", "save_figure"]
 
 
 class _NamedLine(Protocol):
@@ -715,6 +719,96 @@ def plot_energy_fits(groups: Mapping[str, tuple[ArrayLike, ArrayLike, LogFit | N
         except ValueError as exc:
             raise ValueError(f"groups[{name!r}]: {exc}") from None
     ax.set_title(title or "Log fits of spectral energy against filling level")
+    ax.legend(fontsize="small")
+    return fig
+
+
+# -- error against run time (millscope.studies) ---------------------------------------------
+_QUANTITY_NAMES = {"mean_torque": "mean torque", "energy": "spectral energy",
+                   "lth_amplitude": "LTH amplitude", "slope_a": "log-fit slope a"}
+_COST_NAMES = {"wall_s": "wall-clock time per run (s)", "particle_steps": "particle-steps per run"}
+
+
+_KNOB_FORMATS = {"dt_fraction": "dt {} T_R", "shear_modulus_factor": "G x{}",
+                 "record_s": "block {} s", "warm_up_s": "warm-up {} s", "sampling": "{} samples",
+                 "scale": "{} scale"}
+
+
+def _knob_changes(setting: Any, reference: Any) -> str:
+    """What a setting changes from the reference, e.g. ``"dt 0.4 T_R, block 2 s"``."""
+    ref, own = reference.to_dict(), setting.to_dict()
+    changed = [_KNOB_FORMATS.get(k, k + " {}").format(
+        "of scale" if v is None else format(v, "g") if isinstance(v, float) else v)
+        for k, v in own.items() if v != ref[k]]
+    return ", ".join(changed) or "reference"
+
+
+def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = "wall_s",
+                  ax: Axes | None = None, title: str | None = None,
+                  annotate: bool = True) -> Figure:
+    """Error against run time of a study (:class:`millscope.studies.StudyResult`), with the
+    Pareto front.
+
+    One point per setting: x its cost (summed over the load levels), y the |relative error| of
+    its seed mean against the reference's, in % (the largest over the load levels). The bars
+    reach 2 standard errors of that error either way (the seed noise of both means; clipped at
+    0): an error whose bar does not reach 0 is a bias, not noise. The settings on the Pareto
+    front (none cheaper and more accurate) are joined by a step line and ringed; the reference
+    is drawn as a star.
+
+    Parameters
+    ----------
+    result : StudyResult
+    quantity : {"mean_torque", "energy", "lth_amplitude", "slope_a"}
+    cost : {"wall_s", "particle_steps"}
+        The x axis (log scale).
+    ax : Axes, optional
+        Draw here instead of in a new figure.
+    title : str, optional
+        Axes title.
+    annotate : bool
+        Write next to each point what it changes from the reference.
+
+    Returns
+    -------
+    Figure
+    """
+    points = [p for p in result.summary(quantity, cost) if np.isfinite(p.error)]
+    if not points:
+        raise ValueError(f"quantity = {quantity!r} has no error in this study (the slope a "
+                         "needs 2 or more load levels)")
+    front = set(result.pareto(quantity, cost))
+    fig, ax, made = _axes(ax, (7.5, 5.0))
+    x = np.array([p.cost for p in points])
+    y = 100.0 * np.array([p.error for p in points])
+    se = 100.0 * 2.0 * np.nan_to_num(np.array([p.error_se for p in points]))
+    ax.errorbar(x, y, yerr=np.vstack([np.minimum(se, y), se]), fmt="o", ms=5, capsize=3,
+                color="tab:blue", label="setting (bars: 2 standard errors)")
+    on_front = sorted((p for p in points if p.setting in front), key=lambda p: p.cost)
+    if on_front:
+        ax.step([p.cost for p in on_front], [100.0 * p.error for p in on_front], where="post",
+                color="tab:red", lw=1.2, label="Pareto front")
+        ax.plot([p.cost for p in on_front], [100.0 * p.error for p in on_front], "o", ms=11,
+                mfc="none", mec="tab:red", mew=1.4, label="_nolegend_")
+    ref = next((p for p in points if p.reference), None)
+    if ref is not None:
+        ax.plot([ref.cost], [0.0], "*", ms=14, color="tab:orange", label="reference")
+    if annotate:
+        reference = result.reference
+        for p in points:
+            ax.annotate(_knob_changes(p.setting, reference), (p.cost, 100.0 * p.error),
+                        xytext=(5, 4), textcoords="offset points", fontsize="x-small")
+    ax.set_xscale("log")
+    plain = FuncFormatter(lambda value, _: f"{value:g}")
+    ax.xaxis.set_major_formatter(plain)
+    # within about a decade the log axis has no major tick: label the minor ones plainly
+    ax.xaxis.set_minor_formatter(plain if x.max() < 30.0 * x.min() else NullFormatter())
+    ax.set_ylim(bottom=0.0)
+    ax.set_xlabel(_COST_NAMES.get(cost, cost))
+    ax.set_ylabel(f"|error| of the {_QUANTITY_NAMES.get(quantity, quantity)} (%)")
+    _set_title(ax, title, f"Error against run time: {_QUANTITY_NAMES.get(quantity, quantity)}",
+               made)
+    _grid(ax)
     ax.legend(fontsize="small")
     return fig
 
