@@ -52,6 +52,7 @@ from ._files import atomic_write
 from .contact import DEFAULT_DT_FRACTION, MAX_DT_FRACTION
 from .record import TorqueRecord
 from .scene import Scene
+from .stiffness import upper_impact_speed
 
 __all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation"]
 
@@ -60,8 +61,10 @@ _FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
 _FILL_JITTER = 0.02  # random offset of a site, in diameters, each axis
 _WALL_GAP = 0.05  # clearance of a placed particle from the drum, in its diameters
 #: Guards (DESIGN.md section 6): a run stops with a message naming the step, the particle and
-#: its values when a particle moves faster than SPEED_BOUND_FACTOR x :func:`speed_bound`'s
-#: estimate of the fastest any particle of the scene can move, or when a contact is deeper than
+#: its values when a particle moves faster than SPEED_BOUND_FACTOR x the fastest impact of the
+#: scene (:func:`millscope.stiffness.upper_impact_speed`, omega R + sqrt(2 g D): a particle
+#: leaves the shell at most at its speed and falls at most the diameter; collisions share
+#: energy, they do not make it), or when a contact is deeper than
 #: MAX_OVERLAP_FRACTION of the smaller radius (of the particle's, at the drum): the smaller
 #: body's centre has then reached the other's surface and the contact normal means nothing.
 #: A run that blows up passes both within steps. Sound runs stay below: the deepest contacts
@@ -494,16 +497,6 @@ def _available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def speed_bound(scene: Scene) -> float:
-    """The fastest a particle of ``scene`` can move, m/s: the drum's tip speed plus the speed
-    of a free fall across the drum, omega R + sqrt(2 g D). A particle thrown off the shell
-    starts at most at the tip speed and falls at most the diameter; collisions share energy,
-    they do not make it. The run's guard is ``SPEED_BOUND_FACTOR`` times this."""
-    drum = scene.drum
-    omega = 2.0 * math.pi * scene.rotation_hz
-    return omega * drum.radius + math.sqrt(2.0 * scene.gravity * drum.diameter)
-
-
 def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
                  track_energy: bool) -> Any:
     drum = scene.drum
@@ -525,7 +518,7 @@ def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
                         gravity=scene.gravity, skin=0.0 if skin is None else skin,
                         clamp_normal=scene.clamp_normal_force, threads=threads,
                         track_energy=track_energy,
-                        max_speed=SPEED_BOUND_FACTOR * speed_bound(scene),
+                        max_speed=SPEED_BOUND_FACTOR * upper_impact_speed(scene),
                         max_overlap=MAX_OVERLAP_FRACTION)
 
 

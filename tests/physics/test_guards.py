@@ -16,7 +16,8 @@ import pytest
 import millscope as ms
 from millscope import _core
 from millscope.contact import MAX_DT_FRACTION
-from millscope.simulation import MAX_OVERLAP_FRACTION, SPEED_BOUND_FACTOR, speed_bound
+from millscope.simulation import MAX_OVERLAP_FRACTION, SPEED_BOUND_FACTOR
+from millscope.stiffness import upper_impact_speed
 
 from .test_engine import STEEL, make_engine
 
@@ -161,7 +162,7 @@ def test_the_speed_bound_of_a_scene() -> None:
     scene = ms.presets.pilot_mill(0.71, None, scale="tiny")
     omega = 0.71 * math.sqrt(2 * 9.81 / (0.88 - 0.025))
     expected = omega * 0.44 + math.sqrt(2 * 9.81 * 0.88)
-    assert speed_bound(scene) == pytest.approx(expected, rel=1e-3)
+    assert upper_impact_speed(scene) == pytest.approx(expected, rel=1e-3)
     sim = ms.Simulation(scene, seed=0, threads=1)
     assert sim._engine.max_speed == pytest.approx(SPEED_BOUND_FACTOR * expected, rel=1e-3)
     assert sim._engine.max_overlap == MAX_OVERLAP_FRACTION
@@ -193,4 +194,4 @@ def test_a_sound_run_stays_inside_the_guards(scale: str, deepest_seen: float) ->
         deepest = max(deepest, sim._engine.max_overlap_ratio())
         fastest = max(fastest, float(np.max(np.linalg.norm(sim._engine.velocities, axis=1))))
     assert deepest < min(MAX_OVERLAP_FRACTION, 1.5 * deepest_seen)
-    assert fastest < SPEED_BOUND_FACTOR * speed_bound(sim.scene) / 5
+    assert fastest < SPEED_BOUND_FACTOR * upper_impact_speed(sim.scene) / 5
