@@ -6,9 +6,10 @@ finished cases), then writes the campaign report into ``<out>``
 (:func:`millscope.report.write_report`: the Table 6 analogue, Figs. 9-15 with the waterfall and
 the log fit y = a ln(x) + b, a :class:`~millscope.fit.Calibration` per group) with a main-job
 section (:func:`main_job_section`): the torque, spectrum and filtered signal of the lowest
-level, whether the energy falls monotonically with the filling, and a leave-one-out check. The defaults (:class:`DemoPlan`) are the LDMS case (ceramic-like particles,
-71 % of critical) at load levels 1..4 at the ``"tiny"`` scale, 8 s of rotation each of which
-the block 2-8 s is analysed: about 5 minutes on 2 cores (README, "Two commands").
+level, whether the energy falls monotonically with the filling, and a leave-one-out check.
+The defaults (:class:`DemoPlan`) are the LDMS case (ceramic-like particles, 71 % of critical)
+at load levels 1..4 at the ``"tiny"`` scale, 8 s of rotation each of which the block 2-8 s is
+analysed: 5 min 11 s on 2 free cores (README, "Two commands").
 
 :func:`run_synthetic_demo` (``millscope demo --synthetic``) runs the same analysis in seconds on
 synthetic records whose energy law is known, so that the analysis can be seen to recover it.
