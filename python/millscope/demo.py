@@ -49,14 +49,13 @@ from .presets import LIFTER_COUNT, LOAD_LEVELS, PARTICLE_KINDS, SCALES, paper_ca
 from .record import TorqueRecord
 from .report import calibration_file_name, write_report
 from .simulation import _available_cores
-from .spectral import band_stop, lifter_harmonic_hz, spectrum
+from .spectral import LTH_CLEAR_BINS, band_stop, lifter_harmonic_hz, spectrum
 from .synthetic import PAPER_HDMS_LAW, SyntheticTorque, synthetic_record
 
 __all__ = ["DemoPlan", "DemoResult", "main_job_section", "pilot_mill_rotation_hz", "run_demo",
            "run_synthetic_demo"]
 
 
-LTH_CLEAR_BINS = 6.0  # the block holds at least this many periods of the LTH (see DemoPlan)
 
 
 @dataclass(frozen=True)

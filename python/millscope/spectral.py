@@ -32,6 +32,7 @@ __all__ = [
     "find_peak",
     "spectral_energy",
     "band_stop",
+    "LTH_CLEAR_BINS",
 ]
 
 WindowName = Literal["hann", "hann_periodic", "rectangular"]
@@ -39,6 +40,11 @@ Samples = TorqueRecord | ArrayLike
 RemoveItem = Literal["mean"] | float
 
 _WINDOWS = ("hann", "hann_periodic", "rectangular")
+
+#: A block must hold at least this many periods of the LTH for the LTH, searched within 3 bins
+#: of lifters x rotation frequency, to lie clear of the mean's main lobe (2 bins with the Hann
+#: window) with a bin to spare.
+LTH_CLEAR_BINS = 6.0
 
 
 def _samples(data: Samples, sample_rate_hz: float | None) -> tuple[NDArray[np.float64], float]:

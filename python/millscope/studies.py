@@ -72,7 +72,7 @@ from .logfit import log_fit, per_unit
 from .presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
 from .record import TorqueRecord
 from .scene import Scene, _choice, _fail, _positive, _real
-from .spectral import lifter_harmonic_hz
+from .spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
 
 __all__ = [
     "KNOBS",
@@ -310,8 +310,6 @@ class StudyPlan:
         object.__setattr__(self, "reference", self._choose_reference())
 
     def _check_blocks(self) -> None:
-        from .demo import LTH_CLEAR_BINS  # the main job's rule (demo imports the figures)
-
         scene = pilot_mill(self.speed_fraction)
         lifters = scene.drum.lifters
         assert lifters is not None  # the pilot mill has lifters
