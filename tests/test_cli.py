@@ -101,3 +101,22 @@ def test_bad_options_exit_2_without_traceback(csv_record) -> None:
                           "--lifters", "16", "--rotation-hz", "0.5"],
                          capture_output=True, text=True)
     assert run.returncode == 2 and "no such file" in run.stderr
+
+
+@pytest.mark.parametrize("raised, code, message", [
+    (KeyboardInterrupt(), 130, "interrupted; the finished cases are kept in"),
+    (RuntimeError("1 of 4 cases failed, first LDMS#2: boom"), 2,
+     "millscope: error: 1 of 4 cases failed, first LDMS#2: boom"),
+])
+def test_demo_reports_ctrl_c_and_a_failed_case_in_one_line(
+        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path,
+        raised: BaseException, code: int, message: str) -> None:
+    import millscope.demo
+
+    def run_demo(*args: object, **kwargs: object) -> None:
+        raise raised
+
+    monkeypatch.setattr(millscope.demo, "run_demo", run_demo)
+    assert main(["demo", "--out", str(tmp_path), "--no-progress"]) == code
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1

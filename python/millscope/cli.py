@@ -15,12 +15,14 @@ import argparse
 import math
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TypeVar
 
 from . import __version__
 
 EXIT_BAD_INPUT = 2
+T = TypeVar("T")
 EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports it
 
 
@@ -167,6 +169,19 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _resumable(run: Callable[[], T], store: Path, what: str) -> T | None:
+    """``run()`` of a campaign-backed command: a failed case becomes one error line (the
+    finished ones are kept), Ctrl-C a note on where the finished ``what`` are, and None."""
+    try:
+        return run()
+    except RuntimeError as exc:
+        raise CliError(str(exc)) from None
+    except KeyboardInterrupt:
+        print(f"millscope: interrupted; the finished {what} are kept in {store} and a rerun "
+              "goes on from there", file=sys.stderr)
+        return None
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     """The main job: a small DEM campaign and its report (or the synthetic analysis)."""
     from .demo import DemoPlan, run_demo, run_synthetic_demo
@@ -179,14 +194,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
              "duration_s": args.duration, "warm_up_s": args.warm_up, "seed": args.seed,
              "threads": args.threads}
     plan = DemoPlan(**{k: v for k, v in given.items() if v is not None})  # else its defaults
-    try:
-        result = run_demo(Path(args.out), plan, progress=not args.no_progress,
-                          max_workers=args.workers)
-    except RuntimeError as exc:  # a failed case: reported in one line, finished cases kept
-        raise CliError(str(exc)) from None
-    except KeyboardInterrupt:
-        print(f"millscope: interrupted; the finished cases are kept in {Path(args.out) / 'store'} "
-              "and a rerun goes on from there", file=sys.stderr)
+    result = _resumable(lambda: run_demo(Path(args.out), plan, progress=not args.no_progress,
+                                         max_workers=args.workers),
+                        Path(args.out) / "store", "cases")
+    if result is None:
         return EXIT_INTERRUPTED
     top = max(r.energy for r in result.results)
     for r in result.results:
@@ -227,14 +238,10 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
     print(f"millscope study accuracy: {len(plan.settings)} settings x {len(plan.load_levels)} "
           f"level(s) x {len(plan.seeds)} seeds = {runs} runs, {args.workers} at a time on "
           f"{plan.threads} engine thread(s); store {out / 'store'}", flush=True)
-    try:
-        result = run_study(plan, out / "store", max_workers=args.workers,
-                           progress=not args.no_progress)
-    except RuntimeError as exc:  # a failed run: reported in one line, finished runs kept
-        raise CliError(str(exc)) from None
-    except KeyboardInterrupt:
-        print(f"millscope: interrupted; the finished runs are kept in {out / 'store'} and a "
-              "rerun goes on from there", file=sys.stderr)
+    result = _resumable(lambda: run_study(plan, out / "store", max_workers=args.workers,
+                                          progress=not args.no_progress),
+                        out / "store", "runs")
+    if result is None:
         return EXIT_INTERRUPTED
     written = result.write(out, quantity=args.quantity)
     print(result.to_markdown(args.quantity))
