@@ -144,6 +144,7 @@ void register_engine(py::module_& m) {
              d["damping_loss"] = e.ledger().damping_loss;
              d["friction_loss"] = e.ledger().friction_loss;
              d["dissipated"] = e.ledger().dissipated;
+             d["spring_work"] = e.ledger().spring_work;
              return d;
            })
       .def("kinetic_energy", &en::Engine::kinetic_energy)
@@ -175,7 +176,7 @@ void register_engine(py::module_& m) {
              d["forces_valid"] = s.forces_valid;
              d["torque"] = py::make_tuple(s.torque.total, s.torque.shell, s.torque.lifters, s.torque.ends);
              d["ledger"] = py::make_tuple(s.ledger.drive_work, s.ledger.damping_loss, s.ledger.friction_loss,
-                                         s.ledger.dissipated);
+                                         s.ledger.dissipated, s.ledger.spring_work);
              return d;
            },
            "Every array and scalar needed to continue the run bit for bit (a checkpoint).")
@@ -204,10 +205,11 @@ void register_engine(py::module_& m) {
             s.forces_valid = scalar_of<bool>(d, "forces_valid");
             const auto t = scalar_of<std::vector<double>>(d, "torque");
             const auto l = scalar_of<std::vector<double>>(d, "ledger");
-            if (t.size() != 4 || l.size() != 4)
+            // a ledger of 4 is a checkpoint from before spring_work was booked
+            if (t.size() != 4 || (l.size() != 4 && l.size() != 5))
               throw std::invalid_argument("the snapshot's torque or ledger has the wrong length");
             s.torque = en::Torque{t[0], t[1], t[2], t[3]};
-            s.ledger = en::Ledger{l[0], l[1], l[2], l[3]};
+            s.ledger = en::Ledger{l[0], l[1], l[2], l[3], l.size() == 5 ? l[4] : 0.0};
             e.restore(s);
           },
           arg("snapshot"));

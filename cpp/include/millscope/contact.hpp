@@ -132,6 +132,11 @@ struct TangentialResult {
                          // energy
   Vec3 dissipative;      // the dissipating part of F_t, N: the dashpot -gamma_t v_t while
                          // sticking, all of F_t while sliding
+  // For the energy ledger only (evaluate<..., Books = true>; zero otherwise):
+  double loss;           // J this step: -F_t . v_t dt less the spring energy's change at the
+                         // current S_t, S_t (|d_t|^2 - |d_t^prev|^2) / 2
+  double spring_work;    // J this step: the energy the spring gained without work as S_t
+                         // followed the overlap, (S_t - S_t^prev) |d_t^prev|^2 / 2
 };
 
 /// Mindlin no-slip spring with damping and Coulomb limit; history: d_t (3 doubles, m).
@@ -151,7 +156,17 @@ struct MindlinFriction {
 
   /// gamma_n: the normal dashpot's coefficient gamma(S_n) (0 without damping); the tangential
   /// one follows from it, gamma(S_t) = gamma_n sqrt(S_t / S_n) (PairConstants).
-  template <class Damping>
+  /// Books: also the ledger's terms. The spring's energy S_t |d_t|^2 / 2 changes over a step by
+  ///   S_t (|d_t|^2 - |d_t^prev|^2) / 2 + (S_t - S_t^prev) |d_t^prev|^2 / 2,
+  /// the first part paid by the tangential force's work (what that work does not pay is
+  /// `loss`: the dashpot's and the sliding's share, and velocity Verlet's O(dt^2) difference
+  /// while sticking), the second (`spring_work`) by nothing: S_t follows the overlap (6).
+  /// S_t^prev is (6) at the previous overlap d_n + v_n dt (exact to first order in dt; off by
+  /// |v_t|^2 dt^2 / (2 |x_i - x_j|) between spheres). With the whole F_t booked as
+  /// `dissipative` (its work with the full-step velocities is what the integrator applies),
+  ///   work of F_t + change of the spring's energy = spring_work - (loss + the full-step share)
+  /// holds step by step, sticking or sliding.
+  template <class Damping, bool Books = false>
   MILLSCOPE_HOT_INLINE static TangentialResult evaluate(const PairConstants& p,
                                                         const Kinematics& k, double f_n,
                                                         double gamma_n, double dt,
@@ -194,7 +209,16 @@ struct MindlinFriction {
     if (sliding) {
       friction_loss = -f_t.dot(k.v_t) * dt - 0.5 * s_t * (d_t.squaredNorm() - before2);
     }
-    return TangentialResult{f_t, sliding, damping_power, friction_loss, dissipative};
+    double loss = 0.0, spring_work = 0.0;
+    if constexpr (Books) {
+      dissipative = f_t;
+      loss = -f_t.dot(k.v_t) * dt - 0.5 * s_t * (d_t.squaredNorm() - before2);
+      const double d_prev = std::max(k.d_n + k.v_n * dt, 0.0);  // the overlap a step ago
+      const double s_prev = s_t * std::sqrt(d_prev / k.d_n);    // (6) at d_prev
+      spring_work = 0.5 * (s_t - s_prev) * before2;
+    }
+    return TangentialResult{f_t,         sliding, damping_power, friction_loss,
+                            dissipative, loss,    spring_work};
   }
   /// Energy held by the tangential spring, S_t |d_t|^2 / 2, J (S_t at the current overlap).
   static double energy(const PairConstants& p, double sqrt_rd, const double* history) {
@@ -234,7 +258,12 @@ struct ContactForce {
   Vec3 dissipative;      // the dissipating part of the force on i, N: the normal dashpot
                          // (F_n - F_ne) n plus TangentialResult::dissipative. Its work with
                          // the full-step velocity is what the integrator really removes
-                         // (engine.hpp, Ledger::dissipated)
+                         // (engine.hpp, Ledger::dissipated). Booked (Books): the normal
+                         // dashpot plus all of F_t
+  // For the energy ledger only (Books; zero otherwise):
+  double loss;           // J this step: the normal dashpot's (F_ne - F_n) v_n dt plus
+                         // TangentialResult::loss
+  double spring_work;    // J this step, see TangentialResult
 };
 
 /// A contact law composed of parts. history_size doubles per contact hold the state of the
@@ -256,6 +285,8 @@ struct ContactLaw {
 
   /// The force on i given the contact kinematics (d_n > 0); dt is the step over which the
   /// tangential history advances. `history` points at history_size doubles (may be null when 0).
+  /// Books: compute ContactForce::spring_work (the engine's energy ledger).
+  template <bool Books = false>
   MILLSCOPE_HOT_INLINE static ContactForce evaluate(const PairConstants& p, const Kinematics& k, double dt,
                                double* history) {
     const auto elastic = Normal::evaluate(p, k);
@@ -273,16 +304,21 @@ struct ContactLaw {
                    false,
                    (elastic.force - f_n) * k.v_n,
                    0.0,
-                   (f_n - elastic.force) * k.n};
+                   (f_n - elastic.force) * k.n,
+                   Books ? (elastic.force - f_n) * k.v_n * dt : 0.0,
+                   0.0};
     if constexpr (Tangential::active) {
       const TangentialResult t =
-          Tangential::template evaluate<Damping>(p, k, f_n, gamma_n, dt, history + tangential_offset);
+          Tangential::template evaluate<Damping, Books>(p, k, f_n, gamma_n, dt,
+                                                        history + tangential_offset);
       c.force += t.force;
       c.tangential = t.force;
       c.sliding = t.sliding;
       c.damping_power += t.damping_power;
       c.friction_loss = t.friction_loss;
       c.dissipative += t.dissipative;
+      c.loss += t.loss;
+      c.spring_work = t.spring_work;
     } else {
       (void)dt;
       (void)history;
@@ -353,19 +389,21 @@ struct PairForce {
   double damping_power;  // W, see ContactForce
   double friction_loss;  // J this step, see ContactForce
   Vec3 dissipative;      // N, on i, see ContactForce (on j: -dissipative)
+  double loss;           // J this step, see ContactForce
+  double spring_work;    // J this step, see ContactForce
 };
 
 /// One touching contact (d_n > 0) given its geometry: normal n (from j to i), overlap, R*, m*,
 /// the contact-point velocity of i relative to j and the radii (r_j = 0 for a wall).
-template <class Law>
+template <class Law, bool Books = false>
 MILLSCOPE_HOT_INLINE PairForce pair_force(const PairConstants& p, const Vec3& n, double d_n, double r_star,
                             double m_star, const Vec3& v_rel, double r_i, double r_j, double dt,
                             double* history) {
   const Kinematics k = make_kinematics(n, d_n, r_star, m_star, v_rel);
-  const ContactForce c = Law::evaluate(p, k, dt, history);
+  const ContactForce c = Law::template evaluate<Books>(p, k, dt, history);
   PairForce out{true,          d_n,        n,         c.force,      Vec3::Zero(),
                 Vec3::Zero(),  c.normal,   c.tangential, c.sliding, c.damping_power,
-                c.friction_loss, c.dissipative};
+                c.friction_loss, c.dissipative, c.loss, c.spring_work};
   if constexpr (Law::has_friction) {
     const Vec3 nxf = n.cross(c.tangential);
     out.torque_i = -r_i * nxf;  // (-r_i n) x F_t
@@ -378,7 +416,7 @@ namespace detail {
 
 inline PairForce apart(const Vec3& n, double d_n) {
   return PairForce{false, d_n,          n,     Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
-                   0.0,   Vec3::Zero(), false, 0.0,          0.0,          Vec3::Zero()};
+                   0.0,   Vec3::Zero(), false, 0.0,          0.0,          Vec3::Zero(), 0.0, 0.0};
 }
 
 }  // namespace detail

@@ -75,23 +75,27 @@ struct Torque {
 
 /// Running totals of work and losses since the engine was made, J. With the kinetic, potential
 /// and elastic energies they close the energy balance:
-///   drive_work = change of (kinetic + potential + elastic) + dissipated.
+///   drive_work + spring_work = change of (kinetic + potential + elastic) + dissipated.
 /// `dissipated` is what the integrator removes: per step, the work of the dissipating forces
-/// (contact::ContactForce::dissipative) with the full-step velocities v(t + dt), less the
-/// spring energy a sliding contact gives up. `damping_loss` and `friction_loss` split the loss
-/// by cause but take the velocities the forces were computed from, v(t + dt/2); they are
-/// first-order estimates whose sum exceeds `dissipated` by O(dt / contact time) (4.3 % at
-/// dt = 0.2 Rayleigh time in the soft pilot mill): the velocity Verlet's second half kick, which
-/// the dashpots themselves oppose, is missing from them.
-/// Not booked anywhere: the Mindlin spring's stiffness S_t follows the overlap (6), so
-/// |d_t|^2 dS_t / 2 changes its energy without work, and a contact that ends drops what its
-/// spring holds. In the soft pilot mill the balance closes to 0.3 % of the drive work.
+/// (contact::ContactForce::dissipative: the normal dashpot and, booked, all of F_t) with the
+/// full-step velocities v(t + dt), less the change of the tangential springs' energy at their
+/// current stiffness (contact::MindlinFriction::evaluate). `spring_work` is the energy the
+/// Mindlin springs gain without work: their stiffness S_t follows the overlap (6), so
+/// |d_t|^2 dS_t / 2 changes their energy, and a contact that ends drops what its spring holds
+/// (a damped contact leaves in tension, sliding: its spring is not empty). It is a property of
+/// the law, not an error: 0.7 % of the drive work at the paper's mu = 0.15, 13 % at mu = 1
+/// (tiny slice). `damping_loss` and `friction_loss` split the loss by cause but take the
+/// velocities the forces were computed from, v(t + dt/2); they are first-order estimates whose
+/// sum exceeds `dissipated` by O(dt / contact time) (4.3 % at dt = 0.2 Rayleigh time in the
+/// soft pilot mill): the velocity Verlet's second half kick, which the dashpots themselves
+/// oppose, is missing from them.
 struct Ledger {
   double drive_work = 0.0;     // integral of omega x torque dt: the work the drive did
   double damping_loss = 0.0;   // integral of the dashpots' power (normal; tangential while
                                // sticking), at the half-step velocities
   double friction_loss = 0.0;  // energy lost to Coulomb sliding (see contact::TangentialResult)
   double dissipated = 0.0;     // all the energy dashpots and sliding removed, exactly
+  double spring_work = 0.0;    // energy the Mindlin springs gained without work (< 0: lost)
 };
 
 /// Which specialised step kernel a scene needs (DESIGN.md section 7).

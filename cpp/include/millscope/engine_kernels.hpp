@@ -26,6 +26,8 @@ struct alignas(64) StepPartial {
   double damping_power = 0.0;                     // W
   double friction_loss = 0.0;                     // J
   double dissipation_shift = 0.0;                 // J: see Ledger::dissipated
+  double loss = 0.0;                              // J: contact::ContactForce::loss
+  double spring_work = 0.0;                       // J: see Ledger::spring_work
   double displacement2 = 0.0;                     // largest squared move since the list build
   std::size_t bad = std::numeric_limits<std::size_t>::max();  // first particle in a bad state
   std::size_t homeless = std::numeric_limits<std::size_t>::max();  // touches the drum, no block
@@ -129,6 +131,57 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // the particles after its rows up to its last partner (buffer_end). No two threads write the
   // same place.
   double* const dissip = e.dissipative_.data();
+
+  // Ledger: a contact that ends drops what its spring held after the step before,
+  // S_t |d_t|^2 / 2 with S_t (6) at the overlap of then (Ledger::spring_work). The damped
+  // contact leaves in tension and slides out, so that energy does not vanish with the overlap:
+  // it scales as mu^2 (F_n, S_t and the dashpot all go as d_n^(1/4) to d_n^(1/2)).
+  auto spring_energy_at = [](const materials::PairConstants& pc, double r_star, double d_prev,
+                             const double* hist) {
+    if constexpr (friction) {
+      if (!(d_prev > 0.0)) return 0.0;
+      return Law::tangential_part::energy(pc, std::sqrt(r_star * d_prev),
+                                          hist + Law::tangential_offset);
+    } else {
+      (void)pc, (void)r_star, (void)d_prev, (void)hist;
+      return 0.0;
+    }
+  };
+  // ... for a pair that has separated: its previous separation is d - (v_i - v_j) dt exactly.
+  auto ended_pair_energy = [&](std::size_t i, std::size_t j, double dx, double dy, double dz,
+                               double history_dt, const double* hist) {
+    const double px = dx - (vx[i] - vx[j]) * history_dt, py = dy - (vy[i] - vy[j]) * history_dt,
+                 pz = dz - (vz[i] - vz[j]) * history_dt;
+    const materials::PairConstants& pc =
+        OneMaterial ? pc_one
+                    : table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(mat[j]));
+    const double r_sum = r[i] + r[j];
+    return spring_energy_at(pc, r[i] * r[j] / r_sum, r_sum - std::sqrt(px * px + py * py + pz * pz),
+                            hist);
+  };
+  // ... for a wall slot: the previous position x - v dt, turned by omega dt into the drum's
+  // frame of now (the lifters have turned since; the shell and the end walls look the same).
+  auto ended_wall_energy = [&](std::size_t i, std::size_t slot, int lifter, double history_dt,
+                               const double* hist) {
+    const double a = e.omega_ * history_dt, c = std::cos(a), sn = std::sin(a);
+    const double px = x[i] - vx[i] * history_dt, py = y[i] - vy[i] * history_dt,
+                 pz = z[i] - vz[i] * history_dt;
+    const Vec3 prev(c * px - sn * py, sn * px + c * py, pz);
+    double d_prev = 0.0;
+    if (slot == 0) {
+      d_prev = std::hypot(prev.x(), prev.y()) + r[i] - geom.radius;
+    } else if (slot == 1) {
+      d_prev = r[i] - prev.z();
+    } else if (slot == 2) {
+      d_prev = prev.z() + r[i] - geom.length;
+    } else if (lifter >= 0) {
+      d_prev = drum::lifter_contact(geom, e.lifter_angles_, lifter, prev, r[i]).overlap;
+    }
+    const materials::PairConstants& pc =
+        OneMaterial ? pc_one : table(static_cast<std::size_t>(mat[i]), drum_mat);
+    return spring_energy_at(pc, r[i], d_prev, hist);
+  };
+
   auto pair_pass = [&](int t, double history_dt, StepPartial& part) {
     const std::size_t row_begin = e.row_split_[static_cast<std::size_t>(t)];
     const std::size_t own_end = e.row_split_[static_cast<std::size_t>(t) + 1];
@@ -157,6 +210,10 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         const double r_sum = r[i] + r[j];
         const double d2 = dx * dx + dy * dy + dz * dz;
         if (!(d2 < r_sum * r_sum)) {
+          if constexpr (dissipates && friction) {
+            if (hist[0] != 0.0 || hist[1] != 0.0 || hist[2] != 0.0)
+              part.spring_work -= ended_pair_energy(i, j, dx, dy, dz, history_dt, hist);
+          }
           if constexpr (hs > 0) Law::clear(hist);
           continue;
         }
@@ -176,7 +233,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
                         : table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(mat[j]));
         const double r_star = r[i] * r[j] / r_sum;
         const double m_star = 1.0 / (inv_m[i] + inv_m[j]);
-        const contact::PairForce pf = contact::pair_force<Law>(
+        const contact::PairForce pf = contact::pair_force<Law, dissipates>(
             pc, nrm, r_sum - dist, r_star, m_star, v_rel, r[i], r[j], history_dt, hist);
 
         // What i and j receive, in the layout of own[].
@@ -190,9 +247,13 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         put(0, pf.force_i, -pf.force_i);
         if constexpr (friction) {
           put(3, pf.torque_i, pf.torque_j);
-          if constexpr (dissipates) part.friction_loss += pf.friction_loss;
+          if constexpr (dissipates) {
+            part.friction_loss += pf.friction_loss;
+            part.spring_work += pf.spring_work;
+          }
         }
         if constexpr (dissipates) {
+          part.loss += pf.loss;
           put(6, pf.dissipative, -pf.dissipative);
           if constexpr (friction) {
             const Vec3 nxd = nrm.cross(pf.dissipative);  // (-r_i n) x d on i, (r_j n) x (-d) on j
@@ -293,6 +354,9 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
                 return false;
               }();
               slot = slot3_held ? 4 : 3;
+              if constexpr (dissipates)  // the slot's last holder has left it
+                part.spring_work -= ended_wall_energy(i, slot, lifter_of_slot[slot - 3],
+                                                      history_dt, wall_hist + slot * 3);
               lifter_of_slot[slot - 3] = wc.index;
               Law::reset(wall_hist + slot * 3);
             }
@@ -308,7 +372,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         if constexpr (friction) v_rel += wi.cross(-r[i] * wc.normal);
         const materials::PairConstants& pc =
             OneMaterial ? pc_one : table(static_cast<std::size_t>(mat[i]), drum_mat);
-        const contact::PairForce pf = contact::pair_force<Law>(
+        const contact::PairForce pf = contact::pair_force<Law, dissipates>(
             pc, wc.normal, wc.overlap, r[i], m[i], v_rel, r[i], 0.0, history_dt, hist);
         f += pf.force_i;
         // Drive torque: ((x_c - axis) x F_drum_on_particle) . z (DESIGN.md section 2).
@@ -323,12 +387,16 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         }
         if constexpr (dissipates) {
           part.damping_power += pf.damping_power;
+          part.loss += pf.loss;
           diss += pf.dissipative;
           if constexpr (friction) diss_tq += wc.normal.cross(pf.dissipative) * -r[i];
         }
         if constexpr (friction) {
           tq += pf.torque_i;
-          if constexpr (dissipates) part.friction_loss += pf.friction_loss;
+          if constexpr (dissipates) {
+            part.friction_loss += pf.friction_loss;
+            part.spring_work += pf.spring_work;
+          }
         }
       }
       if constexpr (friction) {
@@ -337,6 +405,9 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         if (ended != 0) {
           for (std::size_t slot = 0; slot < wall_slots; ++slot) {
             if (!(ended & (1u << slot))) continue;
+            if constexpr (dissipates)
+              part.spring_work -= ended_wall_energy(i, slot, slot >= 3 ? lifter_of_slot[slot - 3] : -1,
+                                                    history_dt, wall_hist + slot * 3);
             if (slot >= 3) lifter_of_slot[slot - 3] = -1;
             Law::reset(wall_hist + slot * 3);
           }
@@ -419,7 +490,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // torque and the ledger, tells the observer and writes the error.
   auto close_step = [&](const StepPartial* parts, double ledger_dt, bool master, long step) {
     Torque tq;
-    double damping = 0.0, friction_loss = 0.0, shift = 0.0;
+    double damping = 0.0, friction_loss = 0.0, shift = 0.0, loss = 0.0, spring_work = 0.0;
     std::size_t bad = std::numeric_limits<std::size_t>::max(), homeless = bad;
     const StepPartial* deepest = nullptr;  // the deepest contact beyond max_overlap
     for (int b = 0; b < team; ++b) {
@@ -432,6 +503,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       damping += p.damping_power;
       friction_loss += p.friction_loss;
       shift += p.dissipation_shift;
+      spring_work += p.spring_work;
+      loss += p.loss;
       bad = std::min(bad, p.bad);
     }
     tq.total = tq.shell + tq.lifters + tq.ends;
@@ -442,10 +515,11 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       if (ledger_dt > 0.0 && Law::dissipates && !Tally) {
         // not booked: unknown from here on
         e.ledger_.damping_loss = e.ledger_.friction_loss = e.ledger_.dissipated =
-            std::numeric_limits<double>::quiet_NaN();
+            e.ledger_.spring_work = std::numeric_limits<double>::quiet_NaN();
       } else if (ledger_dt > 0.0) {
         e.ledger_.friction_loss += friction_loss;
-        e.ledger_.dissipated += damping * ledger_dt + friction_loss + shift;
+        e.ledger_.dissipated += loss + shift;
+        e.ledger_.spring_work += spring_work;
       }
       if (observer != nullptr && ledger_dt > 0.0) observer->after_step(step, tq);
     }
