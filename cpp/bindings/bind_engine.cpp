@@ -58,6 +58,7 @@ void register_engine(py::module_& m) {
   using py::arg;
   using IntArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
 
+  m.attr("GUARD_INTERVAL") = en::guard_interval;  // steps between the state guards' looks
   py::class_<en::Engine>(m, "Engine", "The DEM engine: state, step loop, torque (engine.hpp).")
       .def(py::init([](std::vector<materials::Material> materials, const InArray& restitution,
                        const InArray& friction, int drum_material, const drum::Geometry& geometry,

@@ -9,6 +9,8 @@ refused before anything runs.
 from __future__ import annotations
 
 import math
+import re
+from typing import Any
 
 import numpy as np
 import pytest
@@ -62,13 +64,15 @@ def test_non_finite_input_is_refused_before_anything_runs(where: str) -> None:
     assert eng.step_count == 0
 
 
-@pytest.mark.parametrize("bad", [math.nan, math.inf])
-def test_a_non_finite_value_arising_in_the_run_stops_it(bad: float) -> None:
-    """A ball resting on the end wall with its wall contact history made non-finite (as a
-    corrupted checkpoint would): the tangential force, then the velocity turn non-finite and
-    the run stops within the step."""
-    eng = guarded_engine([[0.0, 0.0, R - 1e-6]], [[0.01, 0.0, 0.0]])
+def corrupted_engine(bad: float, extra: list[float] | None = None) -> Any:
+    """A ball resting on the end wall, 5 steps in, with its wall contact history made
+    non-finite (as a corrupted checkpoint would): the history enters the force of step 6,
+    whose kick at step 7 makes the velocity non-finite. `extra`: a second ball there, moving
+    a whole neighbour-list skin per step along -x."""
+    eng = guarded_engine([[0.0, 0.0, R - 1e-6], *([extra] if extra else [])])
+    eng.velocities = [[0.01, 0.0, 0.0], *([[-eng.skin / eng.dt, 0.0, 0.0]] if extra else [])]
     eng.advance(5)
+    assert extra is None or eng.list_builds == 1 + 5  # the first build, then one every step
     snap = eng.snapshot()
     history = np.asarray(snap["wall_history"]).copy()
     held = history != 0.0
@@ -76,10 +80,38 @@ def test_a_non_finite_value_arising_in_the_run_stops_it(bad: float) -> None:
     history[held] = bad
     snap["wall_history"] = history
     eng.restore(snap)
-    # the history enters the force of step 6, whose kick at step 7 makes the velocity so
-    with pytest.raises(RuntimeError, match=r"stopped at step 7 .*particle 0 .*has non-finite "
-                       r"values.*Hint"):
-        eng.advance(3)
+    return eng
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_a_non_finite_value_arising_in_the_run_stops_it(bad: float) -> None:
+    """The state guards look every GUARD_INTERVAL steps: the run stops at the first look after
+    step 7, not later."""
+    eng = corrupted_engine(bad)
+    with pytest.raises(RuntimeError, match=r"stopped at step (\d+) .*particle 0 .*has non-finite "
+                       r"values.*Hint") as stop:
+        eng.advance(3 * _core.GUARD_INTERVAL)
+    step = int(re.search(r"stopped at step (\d+)", str(stop.value)).group(1))
+    assert step == 7 + (-7) % _core.GUARD_INTERVAL
+    assert eng.step_count == step
+
+
+def test_the_last_step_of_a_call_is_always_guarded() -> None:
+    """Whatever the interval, a call does not hand back a state it did not look at."""
+    eng = corrupted_engine(math.nan)
+    with pytest.raises(RuntimeError, match=r"stopped at step 7 .*has non-finite values"):
+        eng.advance(2)
+
+
+def test_a_non_finite_state_is_caught_before_a_list_build() -> None:
+    """Between the looks of the state guards, a neighbour-list build looks first: a
+    non-finite position must not be binned. Ball 0 turns non-finite at step 7 (as in
+    corrupted_engine); ball 1 crosses a whole skin every step, so the list is built at every
+    step, step 7 included, which is not a look of the state guards."""
+    eng = corrupted_engine(math.nan, extra=[0.2, 0.0, MID])
+    assert 7 % _core.GUARD_INTERVAL != 0
+    with pytest.raises(RuntimeError, match=r"stopped at step 7 .*particle 0 .*non-finite"):
+        eng.advance(3 * _core.GUARD_INTERVAL)
 
 
 def test_a_speed_above_the_bound_stops_the_run() -> None:

@@ -109,6 +109,16 @@ struct Variant {
   std::string describe() const;
 };
 
+/// The step kernels check every contact against Config::max_overlap at every step (a contact
+/// too soft for its impact can pass through the limit and out again within a few steps), and
+/// the state guards (Config::max_speed, a centre beyond the shell, non-finite values) at every
+/// guard_interval-th step of the engine's count, at the last step of each call and before
+/// every neighbour-list build or lifter refresh: those states persist (NaN stays NaN, and an
+/// escaped or blown-up particle meets a wall far deeper than the overlap limit), so they are
+/// reported at most guard_interval - 1 steps late and are never binned. Checked every step,
+/// the state guards took 1.4 % of a step's instructions (paper balls, callgrind).
+inline constexpr long guard_interval = 8;
+
 /// Wall contact history per particle: shell, low end, high end, and two lifter slots.
 inline constexpr std::size_t wall_slots = 5;
 

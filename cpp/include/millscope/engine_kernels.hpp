@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "millscope/contact.hpp"
@@ -442,8 +443,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   };
 
   // First half kick and drift for particles [lo, hi); tracks the largest move since the build
-  // and guards the new state.
-  auto kick_drift = [&](int t, StepPartial& part) {
+  // and, with `guard` (std::true_type), guards the new state.
+  auto kick_drift = [&](int t, StepPartial& part, auto guard) {
     const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
     const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
     double move2 = 0.0;
@@ -475,11 +476,12 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       const double dx = xi - e.x_ref_[i], dy = yi - e.y_ref_[i];
       move2 = std::max(move2, dx * dx + dy * dy + dz * dz);
       // the guard (see sound), branch-free
-      all_sound &= (vxi * vxi + vyi * vyi + vzi * vzi <= max_speed2) &
-                   (xi * xi + yi * yi <= radius2);
+      if constexpr (decltype(guard)::value)
+        all_sound &= (vxi * vxi + vyi * vyi + vzi * vzi <= max_speed2) &
+                     (xi * xi + yi * yi <= radius2);
     }
     part.displacement2 = move2;
-    if (!all_sound) {  // rare: find the first particle that failed
+    if (decltype(guard)::value && !all_sound) {  // rare: find the first particle that failed
       for (std::size_t i = lo; i < hi && part.bad == std::numeric_limits<std::size_t>::max(); ++i)
         if (!sound(i)) part.bad = i;
     }
@@ -569,9 +571,16 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     double theta = e.theta_, reach_theta = e.reach_theta_;
     for (long s = 0; !failed; ++s) {
       StepPartial* const parts = partials_of(s);
+      // The state guards look at every guard_interval-th step of the engine's count and at the
+      // last step of the call; rebuild and refresh_walls look before they bin the particles.
+      const bool guarded = (first_step + s + 1) % guard_interval == 0 || s + 1 == steps;
       if (s < steps) {
         parts[t] = StepPartial{};
-        kick_drift(t, parts[t]);
+        if (guarded) {
+          kick_drift(t, parts[t], std::true_type{});
+        } else {
+          kick_drift(t, parts[t], std::false_type{});
+        }
       }
 #pragma omp barrier
       // Every particle has drifted and the step before is complete: close it.
@@ -594,6 +603,15 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           e.theta_ = theta;
           e.step_ = first_step + s + 1;
           if constexpr (Lifters) e.lifter_angles_.update(geom, e.theta_);
+          if (bad == std::numeric_limits<std::size_t>::max() && !guarded) {
+            // not looked at this step: a non-finite or stray position must not be binned
+            for (std::size_t i = 0; i < n; ++i) {
+              if (!sound(i)) {
+                bad = i;
+                break;
+              }
+            }
+          }
           if (bad != std::numeric_limits<std::size_t>::max()) {
             error = describe_bad(e, bad);
           } else if (rebuild_now) {
@@ -602,7 +620,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
             refresh_walls(e);
           }
         }
-        if (bad != std::numeric_limits<std::size_t>::max()) break;
+        if (!error.empty()) break;
         reach_theta = theta;
       } else if (master) {
         // Read by nobody before the barrier after the pair pass.
