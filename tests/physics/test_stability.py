@@ -58,7 +58,9 @@ Measured at the default dt, residual / turnover (tolerance B2): paper stiffness,
 (1 %); restitution 0.01: +0.19 % (4 %); restitution 1: +0.080 %; friction 0: +0.62 %;
 friction 1: +0.27 % (W_spring 13 % of the turnover); drum at rest: +0.44 % (3.5 %); 150 %:
 +0.42 % (4.4 %); level 7 in the small slice: +0.070 % (2.5 %); single particle: +0.097 %; no
-lifters: +0.13 %. Halving dt twice: friction 0 (e = 0.5) +0.624, +0.157, +0.039 %; mu = 1
+lifters: +0.13 %. Real size (-m slow): paper stiffness +0.027 % (1 %); level 7 at paper size
+and stiffness +0.021 % (1 %; W 273.1 J, W_spring 33.6 J, dE -132.1 J, D 438.6 J). Halving dt
+twice: friction 0 (e = 0.5) +0.624, +0.157, +0.039 %; mu = 1
 +0.266, +0.054, +0.011 %; the paper's mu = 0.15 +0.365, +0.094, +0.022 %.
 
 Until the ledger booked W_spring, the balance did not close with friction: the residual tended
