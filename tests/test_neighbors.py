@@ -25,12 +25,15 @@ def brute_force_pairs(pos: np.ndarray, r: np.ndarray, skin: float, period_z: flo
     return set(zip(i.tolist(), j.tolist(), strict=True))
 
 
-@pytest.mark.parametrize(("n", "seed"), [(1, 0), (2, 1), (300, 2), (1500, 3)])
-def test_pairs_equal_brute_force(n: int, seed: int) -> None:
+@pytest.mark.parametrize(("n", "seed", "team"),
+                         [(1, 0, 1), (2, 1, 1), (300, 2, 1), (1500, 3, 1), (2, 1, 3),
+                          (1500, 3, 2), (1500, 3, 7)])
+def test_pairs_equal_brute_force(n: int, seed: int, team: int) -> None:
+    """Built by one thread or in blocks of rows by a team (as the engine's step loop does)."""
     pos, r = random_spheres(n, seed)
     skin = 0.003
     nl = _core.VerletList(skin, 3)
-    nl.build(*pos.T.copy(), r)
+    nl.build(*pos.T.copy(), r, team=team)
     listed = {tuple(p) for p in nl.pairs().tolist()}
     assert len(listed) == len(nl.pairs())  # no duplicates
     assert listed == brute_force_pairs(pos, r, skin)
@@ -51,14 +54,15 @@ def test_periodic_ends_use_the_minimum_image(period_z: float) -> None:
     assert listed != brute_force_pairs(pos, r, 0.002)  # pairs across the ends exist
 
 
-def test_history_follows_its_pair_across_rebuilds() -> None:
+@pytest.mark.parametrize("team", [1, 3])
+def test_history_follows_its_pair_across_rebuilds(team: int) -> None:
     pos, r = random_spheres(600, 11)
     nl = _core.VerletList(0.003, 2)
-    nl.build(*pos.T.copy(), r)
+    nl.build(*pos.T.copy(), r, team=team)
     pairs0 = nl.pairs()
     nl.history = np.column_stack([pairs0[:, 0] * 1e4 + pairs0[:, 1], -pairs0[:, 1]])
     moved = pos + np.random.default_rng(12).normal(0, 0.002, pos.shape)
-    nl.build(*moved.T.copy(), r)
+    nl.build(*moved.T.copy(), r, team=team)
     pairs1, h = nl.pairs(), nl.history
     old = {tuple(p) for p in pairs0.tolist()}
     kept = np.array([tuple(p) in old for p in pairs1.tolist()])
@@ -77,3 +81,5 @@ def test_bad_arguments() -> None:
     nl = _core.VerletList(0.001, 3)
     with pytest.raises(ValueError, match="equal length"):
         nl.build(np.zeros(3), np.zeros(2), np.zeros(3), np.ones(3))
+    with pytest.raises(ValueError, match="team = 0 is not valid; it must be >= 1"):
+        nl.build(np.zeros(3), np.zeros(3), np.zeros(3), np.ones(3), team=0)

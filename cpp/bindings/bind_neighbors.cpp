@@ -15,16 +15,26 @@ void register_neighbors(py::module_& m) {
       .def(
           "build",
           [](nb::VerletList& self, const InArray& x, const InArray& y, const InArray& z,
-             const InArray& r) {
+             const InArray& r, int team) {
             const auto n = static_cast<std::size_t>(x.shape(0));
             for (const auto* a : {&y, &z, &r})
               if (a->ndim() != 1 || static_cast<std::size_t>(a->shape(0)) != n)
                 throw std::invalid_argument("x, y, z and r must be 1-D arrays of equal length");
+            if (team < 1)
+              throw std::invalid_argument("team = " + std::to_string(team) +
+                                          " is not valid; it must be >= 1");
             const double *px = data_1d(x, "x"), *py_ = y.data(), *pz = z.data(), *pr = r.data();
             py::gil_scoped_release release;
-            self.build(px, py_, pz, pr, n);
+            // the phases of the engine's parallel build, its threads' blocks taken in turn
+            self.begin_build(px, py_, pz, pr, n, nullptr, team);
+            for (int t = 0; t < team; ++t) self.find_rows(px, py_, pz, pr, t, team);
+            self.size_rows();
+            for (int t = team - 1; t >= 0; --t) self.place_rows(t, team);
+            self.finish_build();
           },
-          arg("x"), arg("y"), arg("z"), arg("r"))
+          arg("x"), arg("y"), arg("z"), arg("r"), arg("team") = 1,
+          "Rebuilds the list; `team` > 1 builds it in that many blocks of rows, in the phases "
+          "the engine's threads run in parallel (the list is the same).")
       .def("pairs",
            [](const nb::VerletList& self) {
              const auto& start = self.start();

@@ -537,14 +537,22 @@ void Engine::restore(const Snapshot& s) {
 }
 
 void Engine::Access::rebuild(Engine& e) {
-  if (!e.config_.reorder) {
-    e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_);
-  } else {
+  rebuild_begin(e, 1);
+  e.list_.find_rows(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), 0, 1);
+  e.list_.size_rows();
+  e.list_.place_rows(0, 1);
+  rebuild_end(e);
+}
+
+void Engine::Access::rebuild_begin(Engine& e, int team) {
+  const std::uint32_t* moved = nullptr;
+  if (e.config_.reorder) {
     // Re-store the particles in cell order, then build: the list's history follows the
     // permutation. Forces and torques move too (the next half kick uses them); the pair
     // buffers and the dissipative sums are rewritten by every pair pass.
-    const std::vector<std::uint32_t> from =
+    e.list_moved_ =
         e.list_.spatial_order(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_);
+    const std::vector<std::uint32_t>& from = e.list_moved_;
     std::vector<double> scratch;
     for (auto* a : {&e.x_, &e.y_, &e.z_, &e.vx_, &e.vy_, &e.vz_, &e.wx_, &e.wy_, &e.wz_, &e.fx_,
                     &e.fy_, &e.fz_, &e.tx_, &e.ty_, &e.tz_})
@@ -556,8 +564,13 @@ void Engine::Access::rebuild(Engine& e) {
     std::vector<std::uint32_t> scratch_u32;
     permute(e.order_, from, 1, scratch_u32);
     e.set_particle_constants();  // radius, material, mass, inverses follow from order_
-    e.list_.build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_, from.data());
+    moved = e.list_moved_.data();
   }
+  e.list_.begin_build(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), e.n_, moved, team);
+}
+
+void Engine::Access::rebuild_end(Engine& e) {
+  e.list_.finish_build();
   refresh_walls(e);
   for (std::size_t i = 0; i < e.n_; ++i) {
     e.x_ref_[i] = static_cast<float>(e.x_[i]);

@@ -271,6 +271,7 @@ class Engine {
                                               // particles after its rows that they touch
   std::vector<std::size_t> buffer_end_;       // per thread: 1 + the last partner of its rows
   std::vector<std::size_t> row_split_;        // threads + 1 row boundaries balancing pairs
+  std::vector<std::uint32_t> list_moved_;     // the reorder of the list build under way
 
   long step_ = 0;
   long rotation_start_ = -1;

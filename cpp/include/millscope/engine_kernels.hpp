@@ -41,7 +41,11 @@ struct Engine::Access {
   template <class Law, bool OneMaterial, bool Lifters, bool EndWalls, bool Tally>
   static void run(Engine& e, long steps, StepObserver* observer);
 
-  static void rebuild(Engine& e);
+  static void rebuild(Engine& e);  // by one thread
+  // ... in parallel: rebuild_begin by one thread, the list's find_rows, size_rows and
+  // place_rows phases, then rebuild_end by one thread (see the step loop)
+  static void rebuild_begin(Engine& e, int team);
+  static void rebuild_end(Engine& e);
   static void refresh_walls(Engine& e);
   static void split_rows(Engine& e);
   static std::string describe_bad(const Engine& e, std::size_t i);
@@ -615,12 +619,22 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           if (bad != std::numeric_limits<std::size_t>::max()) {
             error = describe_bad(e, bad);
           } else if (rebuild_now) {
-            rebuild(e);
+            rebuild_begin(e, team);
           } else {
             refresh_walls(e);
           }
         }
         if (!error.empty()) break;
+        if (rebuild_now) {  // every thread finds the partners of its block of rows
+          e.list_.find_rows(x, y, z, r, t, team);
+#pragma omp barrier
+#pragma omp single
+          e.list_.size_rows();
+          e.list_.place_rows(t, team);
+#pragma omp barrier
+#pragma omp single
+          rebuild_end(e);
+        }
         reach_theta = theta;
       } else if (master) {
         // Read by nobody before the barrier after the pair pass.

@@ -26,6 +26,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace millscope::neighbors {
@@ -56,18 +57,42 @@ class VerletList {
 
   /// Rebuilds the list for n spheres (centres x, y, z, radii r), keeping the history of pairs
   /// that stay listed. `moved`, when given, says where each particle came from since the last
-  /// build: the particle now at index k was at index moved[k] (a permutation of 0..n-1).
+  /// build: the particle now at index k was at index moved[k] (a permutation of 0..n-1); it
+  /// must stay valid until the build is finished.
   void build(const double* x, const double* y, const double* z, const double* r, std::size_t n,
              const std::uint32_t* moved = nullptr) {
-    std::vector<std::uint32_t> old_start = std::move(start_);
-    std::vector<std::uint32_t> old_partner = std::move(partner_);
-    std::vector<double> old_history = std::move(history_);
+    begin_build(x, y, z, r, n, moved, 1);
+    find_rows(x, y, z, r, 0, 1);
+    size_rows();
+    place_rows(0, 1);
+    finish_build();
+  }
 
+  // build() in phases, for a team of threads (the engine's step loop builds the rows of each
+  // thread in parallel): begin_build and size_rows by one thread, find_rows and place_rows by
+  // every thread t of the team for its block of rows, a barrier between phases, finish_build
+  // last. The list is the same whatever the team.
+
+  /// Bins the particles and sets the old list aside.
+  void begin_build(const double* x, const double* y, const double* z, const double* r,
+                   std::size_t n, const std::uint32_t* moved, int team) {
+    old_start_ = std::move(start_);
+    old_partner_ = std::move(partner_);
+    old_history_ = std::move(history_);
+    moved_ = moved;
     bin(x, y, z, r, n);
     start_.assign(n + 1, 0);
-    partner_.clear();
+    rows_of_thread_.resize(static_cast<std::size_t>(team));
+  }
+
+  /// The partners of thread t's rows, into its own buffer; their counts into start_[i + 1].
+  void find_rows(const double* x, const double* y, const double* z, const double* r, int t,
+                 int team) {
+    const auto [begin, end] = block_of(t, team);
+    std::vector<std::uint32_t>& found = rows_of_thread_[static_cast<std::size_t>(t)];
+    found.clear();
     std::vector<std::uint32_t> row;
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = begin; i < end; ++i) {
       row.clear();
       const int cx = cell_coord(x[i], lo_[0], 0), cy = cell_coord(y[i], lo_[1], 1),
                 cz = cell_coord(z[i], lo_[2], 2);
@@ -95,30 +120,50 @@ class VerletList {
       }
       std::sort(row.begin(), row.end());
       row.erase(std::unique(row.begin(), row.end()), row.end());  // tiny periodic grids
-      partner_.insert(partner_.end(), row.begin(), row.end());
-      start_[i + 1] = static_cast<std::uint32_t>(partner_.size());
+      found.insert(found.end(), row.begin(), row.end());
+      start_[i + 1] = static_cast<std::uint32_t>(row.size());
     }
+  }
 
+  /// The row starts from the counts; room for the partners and their history.
+  void size_rows() {
+    for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
+    partner_.resize(start_.back());
     history_.assign(partner_.size() * history_size_, 0.0);
-    if (history_size_ > 0 && old_start.size() == n + 1) {
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t old_i = moved != nullptr ? moved[i] : static_cast<std::uint32_t>(i);
-        for (std::uint32_t s = start_[i]; s < start_[i + 1]; ++s) {
-          // The pair's old slot: in the row of its lower old index (a half list).
-          std::uint32_t row = old_i, other = moved != nullptr ? moved[partner_[s]] : partner_[s];
-          const bool swapped = other < row;
-          if (swapped) std::swap(row, other);
-          const auto first = old_partner.begin() + old_start[row];
-          const auto last = old_partner.begin() + old_start[row + 1];
-          const auto it = std::lower_bound(first, last, other);
-          if (it == last || *it != other) continue;
-          const auto old_slot = static_cast<std::size_t>(it - old_partner.begin());
-          const double sign = swapped ? -1.0 : 1.0;
-          for (std::size_t h = 0; h < history_size_; ++h)
-            history_[s * history_size_ + h] = sign * old_history[old_slot * history_size_ + h];
-        }
+  }
+
+  /// Thread t's partners into the list, and the history of its pairs that stay listed.
+  void place_rows(int t, int team) {
+    const auto [begin, end] = block_of(t, team);
+    const std::vector<std::uint32_t>& found = rows_of_thread_[static_cast<std::size_t>(t)];
+    std::copy(found.begin(), found.end(), partner_.begin() + start_[begin]);
+    const std::size_t n = start_.size() - 1;
+    if (history_size_ == 0 || old_start_.size() != n + 1) return;
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t old_i = moved_ != nullptr ? moved_[i] : static_cast<std::uint32_t>(i);
+      for (std::uint32_t s = start_[i]; s < start_[i + 1]; ++s) {
+        // The pair's old slot: in the row of its lower old index (a half list).
+        std::uint32_t row = old_i, other = moved_ != nullptr ? moved_[partner_[s]] : partner_[s];
+        const bool swapped = other < row;
+        if (swapped) std::swap(row, other);
+        const auto first = old_partner_.begin() + old_start_[row];
+        const auto last = old_partner_.begin() + old_start_[row + 1];
+        const auto it = std::lower_bound(first, last, other);
+        if (it == last || *it != other) continue;
+        const auto old_slot = static_cast<std::size_t>(it - old_partner_.begin());
+        const double sign = swapped ? -1.0 : 1.0;
+        for (std::size_t h = 0; h < history_size_; ++h)
+          history_[s * history_size_ + h] = sign * old_history_[old_slot * history_size_ + h];
       }
     }
+  }
+
+  /// Lets go of the old list.
+  void finish_build() {
+    old_start_ = {};
+    old_partner_ = {};
+    old_history_ = {};
+    moved_ = nullptr;
     ++builds_;
   }
 
@@ -243,6 +288,18 @@ class VerletList {
   std::vector<std::uint32_t> cell_start_, cell_particles_;
   std::vector<std::uint32_t> start_, partner_;
   std::vector<double> history_;
+  // during a build: the list before it, where the particles came from, each thread's rows
+  std::vector<std::uint32_t> old_start_, old_partner_;
+  std::vector<double> old_history_;
+  const std::uint32_t* moved_ = nullptr;
+  std::vector<std::vector<std::uint32_t>> rows_of_thread_;
+
+  /// Thread t's block of rows of the list being built.
+  std::pair<std::size_t, std::size_t> block_of(int t, int team) const {
+    const std::size_t n = start_.size() - 1;
+    const auto tt = static_cast<std::size_t>(t), k = static_cast<std::size_t>(team);
+    return {n * tt / k, n * (tt + 1) / k};
+  }
 };
 
 }  // namespace millscope::neighbors
