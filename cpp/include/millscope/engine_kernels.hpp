@@ -216,10 +216,13 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         const double d2 = dx * dx + dy * dy + dz * dz;
         if (!(d2 < r_sum * r_sum)) {
           if constexpr (dissipates && friction) {
-            if (hist[0] != 0.0 || hist[1] != 0.0 || hist[2] != 0.0)
+            if (hist[0] != 0.0 || hist[1] != 0.0 || hist[2] != 0.0) {  // a contact has ended
               part.spring_work -= ended_pair_energy(i, j, dx, dy, dz, history_dt, hist);
+              Law::reset(hist);
+            }
+          } else if constexpr (hs > 0) {
+            Law::clear(hist);
           }
-          if constexpr (hs > 0) Law::clear(hist);
           continue;
         }
         const double dist = std::sqrt(d2);
