@@ -187,7 +187,8 @@ double Engine::bytes_per_particle() const {
   total += bytes(mat_) + bytes(wall_block_) + bytes(wall_lifter_) + bytes(wall_held_) +
            bytes(order_) + bytes(lifter_reach_);
   for (const auto& b : buffers_) total += bytes(b);
-  total += bytes(list_.start()) + bytes(list_.partner()) + bytes(list_.history());
+  total += static_cast<double>(list_.bytes()) + bytes(list_moved_) + bytes(row_split_) +
+           bytes(buffer_end_);
   return total / static_cast<double>(n_);
 }
 

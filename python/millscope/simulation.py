@@ -243,6 +243,9 @@ class Simulation:
 
     @property
     def bytes_per_particle(self) -> float:
+        """Memory the engine keeps per particle, bytes: the state, the per-particle constants,
+        the wall contact history, the neighbour list with its history, cell grid and build
+        buffers, and the threads' pair buffers (capacities, not sizes)."""
         return float(self._engine.bytes_per_particle)
 
     def energies(self) -> dict[str, float]:

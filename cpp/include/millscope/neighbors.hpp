@@ -158,11 +158,13 @@ class VerletList {
     }
   }
 
-  /// Lets go of the old list.
+  /// Lets go of the old list and of the threads' row buffers (memory per particle counts
+  /// between builds; a build allocates them again).
   void finish_build() {
     old_start_ = {};
     old_partner_ = {};
     old_history_ = {};
+    for (auto& rows : rows_of_thread_) rows = {};
     moved_ = nullptr;
     ++builds_;
   }
@@ -192,6 +194,15 @@ class VerletList {
   }
 
   std::size_t pairs() const { return partner_.size(); }
+  /// Bytes the list keeps between builds: rows, partners, history, the cell grid (and the
+  /// threads' row buffers, empty between builds).
+  std::size_t bytes() const {
+    auto of = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+    std::size_t total = of(start_) + of(partner_) + of(history_) + of(cell_start_) +
+                        of(cell_particles_) + of(rows_of_thread_);
+    for (const auto& rows : rows_of_thread_) total += of(rows);
+    return total;
+  }
   const std::vector<std::uint32_t>& start() const { return start_; }
   const std::vector<std::uint32_t>& partner() const { return partner_; }
   std::vector<double>& history() { return history_; }
