@@ -116,16 +116,16 @@ else
     echo "$0: error: the LIGGGHTS run failed; see out.state and log.state in $W" >&2
     exit 1
   }
-  lig_out=$("$PY" - "$W/log.state" "$STEPS" <<'PY'
-import re, sys
-text = open(sys.argv[1]).read()
-loops = re.findall(r"Loop time of ([0-9.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
-wall, procs, n, atoms = loops[-1]
-assert int(n) == int(sys.argv[2]), (n, sys.argv[2])
-print(f"procs={procs} particles={atoms} steps={n} loop_wall_s={float(wall):.3f}")
-print(f"particle_steps_per_s={int(atoms) * int(n) / float(wall):.6g}")
-PY
-  ) || { echo "$0: error: no timed loop in $W/log.state" >&2; exit 1; }
+  # The timed run's own figure: "Loop time of WALL on P procs for N steps with M atoms, ..."
+  loop=$(grep '^Loop time of' "$W/log.state" | tail -n 1)
+  read -r wall procs n atoms <<< "$(echo "$loop" | awk '{print $4, $6, $9, $12}')"
+  if [ -z "$loop" ] || [ "$n" != "$STEPS" ]; then
+    echo "$0: error: no timed loop of $STEPS steps in $W/log.state" >&2
+    exit 1
+  fi
+  lig_out=$(awk -v w="$wall" -v p="$procs" -v n="$n" -v a="$atoms" 'BEGIN {
+    printf "procs=%d particles=%d steps=%d loop_wall_s=%.3f\n", p, a, n, w
+    printf "particle_steps_per_s=%.6g\n", a * n / w }')
   MS_DT=()
 fi
 echo "$lig_out"

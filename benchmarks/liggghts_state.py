@@ -43,16 +43,22 @@ _MESH_DRUM = {"diameter": 0.88, "length": 0.315}
 _MESH_LIFTERS = {"count": 16, "width": 0.03, "height": 0.02, "profile": "rectangular"}
 
 
+def _differ(have: float | int | str, want: float | int | str) -> bool:
+    """Whether a geometry value differs from the mesh's (floats compared with isclose)."""
+    if isinstance(want, float) and isinstance(have, (int, float)):
+        return not math.isclose(have, want)
+    return have != want
+
+
 def _check_geometry(scene: Scene) -> None:
     drum, lifters = scene.drum, scene.drum.lifters
     wrong = [f"drum.{k} = {getattr(drum, k)!r}" for k, v in _MESH_DRUM.items()
-             if not math.isclose(getattr(drum, k), v)]
+             if _differ(getattr(drum, k), v)]
     if lifters is None:
         wrong.append("drum.lifters = None")
     else:
         wrong += [f"drum.lifters.{k} = {getattr(lifters, k)!r}" for k, v in _MESH_LIFTERS.items()
-                  if getattr(lifters, k) != v and not (
-                      isinstance(v, float) and math.isclose(getattr(lifters, k), v))]
+                  if _differ(getattr(lifters, k), v)]
     if wrong or not drum.end_walls:
         raise SystemExit(f"error: scene {scene.name!r} is not the yardstick's drum "
                          f"(D 0.88 m, L 0.315 m, end walls, 16 lifters 30 x 20 mm): "
