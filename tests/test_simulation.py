@@ -102,11 +102,15 @@ def test_trapezoidal_lifters_end_to_end() -> None:
     assert sim.max_overlap_ratio() < hertz_overlap_bound(scene, 0.71)
 
 
+@pytest.mark.parametrize("particles", [None, "ceramic"])
 @pytest.mark.parametrize("threads", [1, 2])
-def test_energy_ledger_changes_nothing_in_the_motion(threads: int) -> None:
+def test_energy_ledger_changes_nothing_in_the_motion(threads: int, particles: str | None) -> None:
     """Without the energy ledger the step sums the same forces in the same order: the torque
-    and the positions are the same to the bit, the drive work too; only the losses go NaN."""
-    scene = ms.presets.pilot_mill(0.71, None, scale="tiny")
+    and the positions are the same to the bit, the drive work too; only the losses go NaN.
+    The two kernels compute the pair contacts apart (with the ledger contact::pair_force, one
+    pair at a time; without it the lanes of contact_forces_in_lanes), so this also holds the
+    lanes to the law, with one material and with a pair table."""
+    scene = ms.presets.pilot_mill(0.71, particles, scale="tiny")
     runs = []
     for track in (True, False):
         sim = ms.Simulation(scene, seed=3, threads=threads, track_energy=track)

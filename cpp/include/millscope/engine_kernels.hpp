@@ -37,6 +37,119 @@ struct alignas(64) StepPartial {
   bool deepest_at_wall = false;
 };
 
+/// One thread's touching pairs of a block of list rows, in list order, as arrays: the pair
+/// pass finds them, computes their forces in SIMD lanes (contact_forces_in_lanes), then sums
+/// them into the particles in list order.
+struct ContactBatch {
+  static constexpr std::size_t max_contacts = 64;  // a block closes once it holds this many
+  static constexpr std::size_t max_rows = 128;     // ... or this many rows
+  std::size_t size = 0;
+  std::vector<std::uint32_t> i, j, slot, pair;  // rows, partners, list slots, pair constants
+  std::vector<double> dx, dy, dz;               // x_i - x_j, m
+  std::vector<double> sx, sy, sz;               // tangential spring d_t, m: in, then out
+  std::vector<double> dist;                     // |x_i - x_j|, m
+  std::vector<double> fx, fy, fz;               // force on i, N
+  std::vector<double> tix, tiy, tiz, tjx, tjy, tjz;  // torques on i and on j, N m
+  std::vector<std::uint32_t> row_end;           // contacts of the block's rows up to each row
+
+  ContactBatch() : row_end(max_rows) { reserve(4 * max_contacts); }
+  /// Room for `more` contacts beyond size (one row may hold many).
+  void reserve(std::size_t more) {
+    const std::size_t need = size + more;
+    if (need <= dist.size()) return;
+    for (auto* v : {&i, &j, &slot, &pair}) v->resize(need);
+    for (auto* v : {&dx, &dy, &dz, &sx, &sy, &sz, &dist, &fx, &fy, &fz, &tix, &tiy, &tiz, &tjx,
+                    &tjy, &tjz})
+      v->resize(need);
+  }
+};
+
+/// The paper's law (contact::HertzMindlin: Hertz (1), viscous damping (2), Mindlin no-slip
+/// spring (5)-(7) with the Coulomb limit (8), unclamped) for every contact of a block, written
+/// branch-free so that the compiler computes several contacts in the lanes of one instruction
+/// (`omp simd`; the sliding select needs -fno-trapping-math). Every operation is the one
+/// contact::pair_force does, in the same order, so the forces are the same to the bit
+/// (tests: a run with the energy ledger, which takes contact::pair_force, moves the same).
+/// Particles are read through the pairs' indices; `pairs` holds the pair constants.
+inline void contact_forces_in_lanes(ContactBatch& b, const materials::PairConstants* pairs,
+                                    const double* x_r, const double* inv_m, const double* vx,
+                                    const double* vy, const double* vz, const double* wx,
+                                    const double* wy, const double* wz, double dt) {
+  const std::size_t n = b.size;
+  const std::uint32_t* __restrict bi = b.i.data();
+  const std::uint32_t* __restrict bj = b.j.data();
+  const std::uint32_t* __restrict bp = b.pair.data();
+  const double* __restrict dxs = b.dx.data();
+  const double* __restrict dys = b.dy.data();
+  const double* __restrict dzs = b.dz.data();
+  double* __restrict sxs = b.sx.data();
+  double* __restrict sys = b.sy.data();
+  double* __restrict szs = b.sz.data();
+  double* __restrict dists = b.dist.data();
+  double* __restrict fxs = b.fx.data();
+  double* __restrict fys = b.fy.data();
+  double* __restrict fzs = b.fz.data();
+  double* __restrict tixs = b.tix.data();
+  double* __restrict tiys = b.tiy.data();
+  double* __restrict tizs = b.tiz.data();
+  double* __restrict tjxs = b.tjx.data();
+  double* __restrict tjys = b.tjy.data();
+  double* __restrict tjzs = b.tjz.data();
+  const double* r = x_r;
+#pragma omp simd
+  for (std::size_t c = 0; c < n; ++c) {
+    const std::uint32_t i = bi[c], j = bj[c];
+    const materials::PairConstants& p = pairs[bp[c]];
+    const double dx = dxs[c], dy = dys[c], dz = dzs[c];
+    const double ri = r[i], rj = r[j], r_sum = ri + rj;
+    const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double inv_dist = 1.0 / dist;
+    const double nx = dx * inv_dist, ny = dy * inv_dist, nz = dz * inv_dist;  // j to i
+    // contact-point velocity of i relative to j: (v_i - v_j) + (w_i x (-r_i n) - w_j x (r_j n))
+    const double ax = -ri * nx, ay = -ri * ny, az = -ri * nz;
+    const double bx = rj * nx, by = rj * ny, bz = rj * nz;
+    const double vrx = (vx[i] - vx[j]) + ((wy[i] * az - wz[i] * ay) - (wy[j] * bz - wz[j] * by));
+    const double vry = (vy[i] - vy[j]) + ((wz[i] * ax - wx[i] * az) - (wz[j] * bx - wx[j] * bz));
+    const double vrz = (vz[i] - vz[j]) + ((wx[i] * ay - wy[i] * ax) - (wx[j] * by - wy[j] * bx));
+    const double r_star = ri * rj / r_sum;
+    const double m_star = 1.0 / (inv_m[i] + inv_m[j]);
+    const double d_n = r_sum - dist;
+    const double v_n = vrx * nx + vry * ny + vrz * nz;
+    const double vtx = vrx - v_n * nx, vty = vry - v_n * ny, vtz = vrz - v_n * nz;
+    const double sqrt_rd = std::sqrt(r_star * d_n);
+    const double s_n = 2.0 * p.e_star * sqrt_rd;                        // (4)
+    const double gamma_n = p.damping_factor * std::sqrt(s_n * m_star);  // (2)
+    const double f_n = (2.0 / 3.0) * s_n * d_n - gamma_n * v_n;         // (1), (2)
+    const double s_t = 8.0 * p.g_star * sqrt_rd;                        // (6)
+    // The spring turned into the tangent plane, its length kept, then advanced by v_t dt.
+    double sx = sxs[c], sy = sys[c], sz = szs[c];
+    const double before2 = sx * sx + sy * sy + sz * sz;
+    const double along = sx * nx + sy * ny + sz * nz;
+    sx -= along * nx, sy -= along * ny, sz -= along * nz;
+    const double after2 = sx * sx + sy * sy + sz * sz;
+    const double keep = after2 > 0.0 ? std::sqrt(before2 / after2) : 0.0;
+    sx *= keep, sy *= keep, sz *= keep;
+    sx += vtx * dt, sy += vty * dt, sz += vtz * dt;
+    const double gamma_t = gamma_n * p.tangential_damping_ratio;  // (7)
+    double ftx = -s_t * sx + -gamma_t * vtx;                      // (5), (7)
+    double fty = -s_t * sy + -gamma_t * vty;
+    double ftz = -s_t * sz + -gamma_t * vtz;
+    const double limit = p.friction * std::abs(f_n);  // (8)
+    const double f2 = ftx * ftx + fty * fty + ftz * ftz;
+    const bool sliding = f2 > limit * limit;
+    const double scale = sliding ? limit / std::sqrt(f2) : 1.0;
+    ftx *= scale, fty *= scale, ftz *= scale;
+    sxs[c] = sliding ? -ftx / s_t : sx;
+    sys[c] = sliding ? -fty / s_t : sy;
+    szs[c] = sliding ? -ftz / s_t : sz;
+    dists[c] = dist;
+    fxs[c] = f_n * nx + ftx, fys[c] = f_n * ny + fty, fzs[c] = f_n * nz + ftz;
+    const double cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
+    tixs[c] = -ri * cx, tiys[c] = -ri * cy, tizs[c] = -ri * cz;  // (-r_i n) x F_t
+    tjxs[c] = -rj * cx, tjys[c] = -rj * cy, tjzs[c] = -rj * cz;  // (r_j n) x (-F_t)
+  }
+}
+
 struct Engine::Access {
   template <class Law, bool OneMaterial, bool Lifters, bool EndWalls, bool Tally>
   static void run(Engine& e, long steps, StepObserver* observer);
@@ -121,6 +234,10 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // Two sets of per-thread partials, by step parity: step s writes set s % 2 while the threads
   // still read set (s - 1) % 2 to close the step before (see the step loop below).
   std::vector<StepPartial> partial(2 * static_cast<std::size_t>(team));
+  // The paper's law without the ledger computes its pair contacts in SIMD lanes
+  // (contact_forces_in_lanes); the ledger's kernels and the other laws take pair_force.
+  constexpr bool in_lanes = std::is_same_v<Law, contact::HertzMindlin> && !Tally;
+  std::vector<ContactBatch> batches(in_lanes ? static_cast<std::size_t>(team) : 0);
   auto partials_of = [&](long s) { return partial.data() + static_cast<std::size_t>(s & 1) * team; };
   std::string error;
 
@@ -204,6 +321,70 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     const std::uint32_t* const start = e.list_.start().data();
     const std::uint32_t* const partner = e.list_.partner().data();
     double* const history = e.list_.history().data();
+    if constexpr (in_lanes) {
+      ContactBatch& b = batches[static_cast<std::size_t>(t)];
+      for (std::size_t block = row_begin; block < own_end;) {
+        // 1. The touching pairs of the rows [block, block_end); a listed pair that does not
+        // touch has its history cleared.
+        b.size = 0;
+        std::size_t block_end = block;
+        while (block_end < own_end && b.size < ContactBatch::max_contacts &&
+               block_end - block < ContactBatch::max_rows) {
+          const std::size_t i = block_end;
+          const double xi = x[i], yi = y[i], zi = z[i], ri = r[i];
+          const std::size_t pair_row = OneMaterial ? 0 : table.size() * mat[i];
+          b.reserve(start[i + 1] - start[i]);
+          for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
+            const std::size_t j = partner[s];
+            double* const hist = history + static_cast<std::size_t>(s) * hs;
+            const double dx = xi - x[j], dy = yi - y[j];
+            double dz = zi - z[j];
+            if constexpr (!EndWalls) dz -= period * std::nearbyint(dz / period);
+            const double r_sum = ri + r[j];
+            if (!(dx * dx + dy * dy + dz * dz < r_sum * r_sum)) {
+              Law::clear(hist);
+              continue;
+            }
+            const std::size_t c = b.size++;
+            b.i[c] = static_cast<std::uint32_t>(i);
+            b.j[c] = static_cast<std::uint32_t>(j);
+            b.slot[c] = s;
+            b.pair[c] = static_cast<std::uint32_t>(OneMaterial ? 0 : pair_row + mat[j]);
+            b.dx[c] = dx, b.dy[c] = dy, b.dz[c] = dz;
+            b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
+          }
+          b.row_end[block_end - block] = static_cast<std::uint32_t>(b.size);
+          ++block_end;
+        }
+        // 2. Their forces, several at a time.
+        contact_forces_in_lanes(b, OneMaterial ? &pc_one : &table(0, 0), r, inv_m, vx, vy, vz,
+                                wx, wy, wz, history_dt);
+        // 3. Springs back, and the sums in list order (those of the loop below, to the bit).
+        std::size_t c = 0;
+        for (std::size_t i = block; i < block_end; ++i) {
+          double sum_i[6] = {};  // force and torque on i
+          for (const std::size_t last = b.row_end[i - block]; c < last; ++c) {
+            const std::size_t j = b.j[c];
+            double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
+            hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
+            const double r_min = std::min(r[i], r[j]), overlap = r[i] + r[j] - b.dist[c];
+            if (overlap > max_overlap * r_min) note_overlap(part, i, overlap / r_min, false);
+            const double on_i[6] = {b.fx[c], b.fy[c], b.fz[c], b.tix[c], b.tiy[c], b.tiz[c]};
+            const double on_j[6] = {-b.fx[c], -b.fy[c], -b.fz[c], b.tjx[c], b.tjy[c], b.tjz[c]};
+            const bool j_own = j < own_end;
+            const std::size_t k = j_own ? j : j - own_end;
+            double* const* const dst = j_own ? own : buffered;
+            for (std::size_t q = 0; q < 6; ++q) {
+              sum_i[q] += on_i[q];
+              dst[q][k] += on_j[q];
+            }
+          }
+          for (std::size_t q = 0; q < 6; ++q) own[q][i] += sum_i[q];
+        }
+        block = block_end;
+      }
+      return;
+    }
     for (std::size_t i = row_begin; i < own_end; ++i) {
       double sum_i[12] = {};  // this row's sums for i, in the layout of own[]
       for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
