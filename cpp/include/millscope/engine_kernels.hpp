@@ -70,9 +70,10 @@ struct ContactBatch {
 /// (`omp simd`; the sliding select needs -fno-trapping-math). Every operation is the one
 /// contact::pair_force does, in the same order, so the forces are the same to the bit
 /// (tests: a run with the energy ledger, which takes contact::pair_force, moves the same).
-/// Particles are read through the pairs' indices; `pairs` holds the pair constants.
+/// Particles are read through the pairs' indices (radius r, m; inverse mass, 1/kg; velocity,
+/// m/s; spin, rad/s); `pairs` holds the pair constants; dt, s, advances the springs.
 inline void contact_forces_in_lanes(ContactBatch& b, const materials::PairConstants* pairs,
-                                    const double* x_r, const double* inv_m, const double* vx,
+                                    const double* r, const double* inv_m, const double* vx,
                                     const double* vy, const double* vz, const double* wx,
                                     const double* wy, const double* wz, double dt) {
   const std::size_t n = b.size;
@@ -95,7 +96,6 @@ inline void contact_forces_in_lanes(ContactBatch& b, const materials::PairConsta
   double* __restrict tjxs = b.tjx.data();
   double* __restrict tjys = b.tjy.data();
   double* __restrict tjzs = b.tjz.data();
-  const double* r = x_r;
 #pragma omp simd
   for (std::size_t c = 0; c < n; ++c) {
     const std::uint32_t i = bi[c], j = bj[c];
