@@ -26,11 +26,7 @@ void register_neighbors(py::module_& m) {
             const double *px = data_1d(x, "x"), *py_ = y.data(), *pz = z.data(), *pr = r.data();
             py::gil_scoped_release release;
             // the phases of the engine's parallel build, its threads' blocks taken in turn
-            self.begin_build(px, py_, pz, pr, n, nullptr, team);
-            for (int t = 0; t < team; ++t) self.find_rows(px, py_, pz, pr, t, team);
-            self.size_rows();
-            for (int t = team - 1; t >= 0; --t) self.place_rows(t, team);
-            self.finish_build();
+            self.build(px, py_, pz, pr, n, nullptr, team);
           },
           arg("x"), arg("y"), arg("z"), arg("r"), arg("team") = 1,
           "Rebuilds the list; `team` > 1 builds it in that many blocks of rows, in the phases "

@@ -539,9 +539,7 @@ void Engine::restore(const Snapshot& s) {
 
 void Engine::Access::rebuild(Engine& e) {
   rebuild_begin(e, 1);
-  e.list_.find_rows(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), 0, 1);
-  e.list_.size_rows();
-  e.list_.place_rows(0, 1);
+  e.list_.build_rows(e.x_.data(), e.y_.data(), e.z_.data(), e.r_.data(), 1);
   rebuild_end(e);
 }
 

@@ -59,13 +59,22 @@ class VerletList {
   /// that stay listed. `moved`, when given, says where each particle came from since the last
   /// build: the particle now at index k was at index moved[k] (a permutation of 0..n-1); it
   /// must stay valid until the build is finished.
+  /// `team` > 1 runs the phases below in that many blocks of rows, one block after another
+  /// (the list is the same).
   void build(const double* x, const double* y, const double* z, const double* r, std::size_t n,
-             const std::uint32_t* moved = nullptr) {
-    begin_build(x, y, z, r, n, moved, 1);
-    find_rows(x, y, z, r, 0, 1);
-    size_rows();
-    place_rows(0, 1);
+             const std::uint32_t* moved = nullptr, int team = 1) {
+    begin_build(x, y, z, r, n, moved, team);
+    build_rows(x, y, z, r, team);
     finish_build();
+  }
+
+  /// The phases between begin_build and finish_build for every block of a team, run by one
+  /// thread; the blocks are placed last to first, as threads may finish in any order.
+  void build_rows(const double* x, const double* y, const double* z, const double* r,
+                  int team) {
+    for (int t = 0; t < team; ++t) find_rows(x, y, z, r, t, team);
+    size_rows();
+    for (int t = team - 1; t >= 0; --t) place_rows(t, team);
   }
 
   // build() in phases, for a team of threads (the engine's step loop builds the rows of each
