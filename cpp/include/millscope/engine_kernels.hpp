@@ -50,9 +50,9 @@ struct ContactBatch {
   std::vector<double> dist;                     // |x_i - x_j|, m
   std::vector<double> fx, fy, fz;               // force on i, N
   std::vector<double> tix, tiy, tiz, tjx, tjy, tjz;  // torques on i and on j, N m
-  std::vector<std::uint32_t> row_end;           // contacts of the block's rows up to each row
+  std::vector<double> row_sum;                  // force and torque on each row's particle
 
-  ContactBatch() : row_end(max_rows) { reserve(4 * max_contacts); }
+  ContactBatch() : row_sum(6 * max_rows) { reserve(4 * max_contacts); }
   /// Room for `more` contacts beyond size (one row may hold many).
   void reserve(std::size_t more) {
     const std::size_t need = size + more;
@@ -353,34 +353,35 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
             b.dx[c] = dx, b.dy[c] = dy, b.dz[c] = dz;
             b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
           }
-          b.row_end[block_end - block] = static_cast<std::uint32_t>(b.size);
           ++block_end;
         }
         // 2. Their forces, several at a time.
         contact_forces_in_lanes(b, OneMaterial ? &pc_one : &table(0, 0), r, inv_m, vx, vy, vz,
                                 wx, wy, wz, history_dt);
-        // 3. Springs back, and the sums in list order (those of the loop below, to the bit).
-        std::size_t c = 0;
-        for (std::size_t i = block; i < block_end; ++i) {
-          double sum_i[6] = {};  // force and torque on i
-          for (const std::size_t last = b.row_end[i - block]; c < last; ++c) {
-            const std::size_t j = b.j[c];
-            double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
-            hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
-            const double r_min = std::min(r[i], r[j]), overlap = r[i] + r[j] - b.dist[c];
-            if (overlap > max_overlap * r_min) note_overlap(part, i, overlap / r_min, false);
-            const double on_i[6] = {b.fx[c], b.fy[c], b.fz[c], b.tix[c], b.tiy[c], b.tiz[c]};
-            const double on_j[6] = {-b.fx[c], -b.fy[c], -b.fz[c], b.tjx[c], b.tjy[c], b.tjz[c]};
-            const bool j_own = j < own_end;
-            const std::size_t k = j_own ? j : j - own_end;
-            double* const* const dst = j_own ? own : buffered;
-            for (std::size_t q = 0; q < 6; ++q) {
-              sum_i[q] += on_i[q];
-              dst[q][k] += on_j[q];
-            }
+        // 3. Springs back, and the sums: those on j straight into j, those on i into the
+        // block's row sums, added to i last. As in the loop below, to the bit: i receives
+        // from the rows before it (j > i in a half list), then its own row's sum.
+        double* const row_sum = b.row_sum.data();  // 6 per row of the block
+        std::fill(row_sum, row_sum + 6 * (block_end - block), 0.0);
+        for (std::size_t c = 0; c < b.size; ++c) {
+          const std::size_t i = b.i[c], j = b.j[c];
+          double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
+          hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
+          const double r_min = std::min(r[i], r[j]), overlap = r[i] + r[j] - b.dist[c];
+          if (overlap > max_overlap * r_min) note_overlap(part, i, overlap / r_min, false);
+          const double on_i[6] = {b.fx[c], b.fy[c], b.fz[c], b.tix[c], b.tiy[c], b.tiz[c]};
+          const double on_j[6] = {-b.fx[c], -b.fy[c], -b.fz[c], b.tjx[c], b.tjy[c], b.tjz[c]};
+          double* const sum_i = row_sum + 6 * (i - block);
+          const bool j_own = j < own_end;
+          const std::size_t k = j_own ? j : j - own_end;
+          double* const* const dst = j_own ? own : buffered;
+          for (std::size_t q = 0; q < 6; ++q) {
+            sum_i[q] += on_i[q];
+            dst[q][k] += on_j[q];
           }
-          for (std::size_t q = 0; q < 6; ++q) own[q][i] += sum_i[q];
         }
+        for (std::size_t i = block; i < block_end; ++i)
+          for (std::size_t q = 0; q < 6; ++q) own[q][i] += row_sum[6 * (i - block) + q];
         block = block_end;
       }
       return;
