@@ -64,6 +64,15 @@ struct ContactBatch {
   }
 };
 
+// The lanes are compiled twice where the loader can choose by the CPU (GCC or Clang, x86-64
+// Linux): for AVX2, four doubles to a register, and for the x86-64 baseline, SSE2 and two. AVX2
+// alone brings no fused multiply-add, so both give the same bits.
+#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__))
+#define MILLSCOPE_LANE_TARGETS __attribute__((target_clones("avx2", "default")))
+#else
+#define MILLSCOPE_LANE_TARGETS
+#endif
+
 /// The paper's law (contact::HertzMindlin: Hertz (1), viscous damping (2), Mindlin no-slip
 /// spring (5)-(7) with the Coulomb limit (8), unclamped) for every contact of a block, written
 /// branch-free so that the compiler computes several contacts in the lanes of one instruction
@@ -72,10 +81,10 @@ struct ContactBatch {
 /// (tests: a run with the energy ledger, which takes contact::pair_force, moves the same).
 /// Particles are read through the pairs' indices (radius r, m; inverse mass, 1/kg; velocity,
 /// m/s; spin, rad/s); `pairs` holds the pair constants; dt, s, advances the springs.
-inline void contact_forces_in_lanes(ContactBatch& b, const materials::PairConstants* pairs,
-                                    const double* r, const double* inv_m, const double* vx,
-                                    const double* vy, const double* vz, const double* wx,
-                                    const double* wy, const double* wz, double dt) {
+MILLSCOPE_LANE_TARGETS inline void contact_forces_in_lanes(
+    ContactBatch& b, const materials::PairConstants* pairs, const double* r, const double* inv_m,
+    const double* vx, const double* vy, const double* vz, const double* wx, const double* wy,
+    const double* wz, double dt) {
   const std::size_t n = b.size;
   const std::uint32_t* __restrict bi = b.i.data();
   const std::uint32_t* __restrict bj = b.j.data();
