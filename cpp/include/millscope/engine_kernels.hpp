@@ -47,18 +47,18 @@ struct ContactBatch {
   std::vector<std::uint32_t> i, j, slot, pair;  // rows, partners, list slots, pair constants
   std::vector<double> dx, dy, dz;               // x_i - x_j, m
   std::vector<double> sx, sy, sz;               // tangential spring d_t, m: in, then out
-  std::vector<double> dist;                     // |x_i - x_j|, m
+  std::vector<double> overlap;                  // d_n = r_i + r_j - |x_i - x_j|, m
   std::vector<double> fx, fy, fz;               // force on i, N
   std::vector<double> tix, tiy, tiz, tjx, tjy, tjz;  // torques on i and on j, N m
-  std::vector<double> row_sum;                  // force and torque on each row's particle
+  std::vector<double> row_sum;  // force, N, and torque, N m, on each row's particle: 6 a row
 
   ContactBatch() : row_sum(6 * max_rows) { reserve(4 * max_contacts); }
   /// Room for `more` contacts beyond size (one row may hold many).
   void reserve(std::size_t more) {
     const std::size_t need = size + more;
-    if (need <= dist.size()) return;
+    if (need <= overlap.size()) return;
     for (auto* v : {&i, &j, &slot, &pair}) v->resize(need);
-    for (auto* v : {&dx, &dy, &dz, &sx, &sy, &sz, &dist, &fx, &fy, &fz, &tix, &tiy, &tiz, &tjx,
+    for (auto* v : {&dx, &dy, &dz, &sx, &sy, &sz, &overlap, &fx, &fy, &fz, &tix, &tiy, &tiz, &tjx,
                     &tjy, &tjz})
       v->resize(need);
   }
@@ -95,7 +95,7 @@ MILLSCOPE_LANE_TARGETS inline void contact_forces_in_lanes(
   double* __restrict sxs = b.sx.data();
   double* __restrict sys = b.sy.data();
   double* __restrict szs = b.sz.data();
-  double* __restrict dists = b.dist.data();
+  double* __restrict overlaps = b.overlap.data();
   double* __restrict fxs = b.fx.data();
   double* __restrict fys = b.fy.data();
   double* __restrict fzs = b.fz.data();
@@ -151,7 +151,7 @@ MILLSCOPE_LANE_TARGETS inline void contact_forces_in_lanes(
     sxs[c] = sliding ? -ftx / s_t : sx;
     sys[c] = sliding ? -fty / s_t : sy;
     szs[c] = sliding ? -ftz / s_t : sz;
-    dists[c] = dist;
+    overlaps[c] = d_n;
     fxs[c] = f_n * nx + ftx, fys[c] = f_n * ny + fty, fzs[c] = f_n * nz + ftz;
     const double cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
     tixs[c] = -ri * cx, tiys[c] = -ri * cy, tizs[c] = -ri * cz;  // (-r_i n) x F_t
@@ -376,7 +376,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           const std::size_t i = b.i[c], j = b.j[c];
           double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
           hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
-          const double r_min = std::min(r[i], r[j]), overlap = r[i] + r[j] - b.dist[c];
+          const double r_min = std::min(r[i], r[j]), overlap = b.overlap[c];
           if (overlap > max_overlap * r_min) note_overlap(part, i, overlap / r_min, false);
           const double on_i[6] = {b.fx[c], b.fy[c], b.fz[c], b.tix[c], b.tiy[c], b.tiz[c]};
           const double on_j[6] = {-b.fx[c], -b.fy[c], -b.fz[c], b.tjx[c], b.tjy[c], b.tjz[c]};
