@@ -31,7 +31,6 @@ struct alignas(64) StepPartial {
   double spring_work = 0.0;                       // J: see Ledger::spring_work
   double displacement2 = 0.0;                     // largest squared move since the list build
   std::size_t bad = std::numeric_limits<std::size_t>::max();  // first particle in a bad state
-  std::size_t homeless = std::numeric_limits<std::size_t>::max();  // touches the drum, no block
   std::size_t deepest = std::numeric_limits<std::size_t>::max();   // a contact beyond max_overlap
   double deepest_ratio = 0.0;                                       // its overlap / radius
   bool deepest_at_wall = false;
@@ -313,6 +312,11 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     return spring_energy_at(pc, r[i], d_prev, hist);
   };
 
+  // The sums of each particle, in the layout of a thread's pair buffer: force, N; torque, N m;
+  // with the ledger, the dissipating force and its torque.
+  double* const own[12] = {fx,         fy,         fz,         tx,
+                           ty,         tz,         dissip,     dissip + n,
+                           dissip + 2 * n, dissip + 3 * n, dissip + 4 * n, dissip + 5 * n};
   auto pair_pass = [&](int t, double history_dt, StepPartial& part) {
     const std::size_t row_begin = e.row_split_[static_cast<std::size_t>(t)];
     const std::size_t own_end = e.row_split_[static_cast<std::size_t>(t) + 1];
@@ -320,9 +324,6 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     double* const buf = e.buffers_[static_cast<std::size_t>(t)].data();
     std::fill(buf, buf + width * later, 0.0);
     // quantity c of particle k: own[c][k] for k < own_end, buffered[c][k - own_end] after
-    double* const own[12] = {fx,         fy,         fz,         tx,
-                             ty,         tz,         dissip,     dissip + n,
-                             dissip + 2 * n, dissip + 3 * n, dissip + 4 * n, dissip + 5 * n};
     double* buffered[12];
     for (std::size_t c = 0; c < 12; ++c) buffered[c] = c < width ? buf + c * later : nullptr;
     for (std::size_t c = 0; c < width; ++c) std::fill(own[c] + row_begin, own[c] + own_end, 0.0);
@@ -485,158 +486,185 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     return speed2 <= max_speed2 && x[i] * x[i] + y[i] * y[i] <= radius2;
   };
 
-  // Per particle: sum the thread buffers, add the drum's contacts and gravity, then (kick)
-  // the second half kick. Particles [lo, hi) belong to thread t.
-  auto particle_pass = [&](int t, double history_dt, bool kick, StepPartial& part) {
-    const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
-    const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
+  // The particles near the drum (those that may touch it before the next refresh_walls): the
+  // drum's contacts, added to the sums of particle i (force, N; torque, N m; with the ledger,
+  // the dissipating force and its torque).
+  auto drum_contacts = [&](std::size_t i, double history_dt, StepPartial& part) {
     const double omega = e.omega_;
-    for (std::size_t i = lo; i < hi; ++i) {
-      // pair sums: the owner's, then those buffered by the threads whose rows come before i
-      // and reach it
-      Vec3 f(fx[i], fy[i] - m[i] * gravity, fz[i]);
-      Vec3 tq = friction ? Vec3(tx[i], ty[i], tz[i]) : Vec3(0.0, 0.0, 0.0);
-      [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
-      if constexpr (dissipates) {
-        diss = Vec3(dissip[i], dissip[n + i], dissip[2 * n + i]);
-        if constexpr (friction) diss_tq = Vec3(dissip[3 * n + i], dissip[4 * n + i], dissip[5 * n + i]);
-      }
-      for (int b = 0; b < team; ++b) {
-        const std::size_t own_end = e.row_split_[static_cast<std::size_t>(b) + 1];
-        if (i < own_end) break;  // row_split grows with b
-        const std::size_t end = e.buffer_end_[static_cast<std::size_t>(b)];
-        if (i >= end) continue;
-        const std::size_t later = end - own_end, k = i - own_end;
-        const double* const buf = e.buffers_[static_cast<std::size_t>(b)].data();
-        f += Vec3(buf[k], buf[later + k], buf[2 * later + k]);
-        if constexpr (friction) tq += Vec3(buf[3 * later + k], buf[4 * later + k], buf[5 * later + k]);
-        if constexpr (dissipates) {
-          diss += Vec3(buf[6 * later + k], buf[7 * later + k], buf[8 * later + k]);
-          if constexpr (friction)
-            diss_tq += Vec3(buf[9 * later + k], buf[10 * later + k], buf[11 * later + k]);
-        }
-      }
-      const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
-      drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(
-          geom, e.lifter_angles_, xi, r[i], Lifters ? e.lifter_reach_[i] : drum::no_lifter);
-      [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
-      [[maybe_unused]] std::int32_t* lifter_of_slot = nullptr;
-      [[maybe_unused]] double* wall_hist = nullptr;
+    Vec3 f(fx[i], fy[i], fz[i]);
+    Vec3 tq = friction ? Vec3(tx[i], ty[i], tz[i]) : Vec3(0.0, 0.0, 0.0);
+    [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
+    if constexpr (dissipates) {
+      diss = Vec3(dissip[i], dissip[n + i], dissip[2 * n + i]);
+      if constexpr (friction) diss_tq = Vec3(dissip[3 * n + i], dissip[4 * n + i], dissip[5 * n + i]);
+    }
+    const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
+    drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(
+        geom, e.lifter_angles_, xi, r[i], Lifters ? e.lifter_reach_[i] : drum::no_lifter);
+    [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
+    [[maybe_unused]] std::int32_t* lifter_of_slot = nullptr;
+    [[maybe_unused]] double* wall_hist = nullptr;
+    if constexpr (friction) {  // a particle near the drum has a block (see particle_pass)
+      const auto block = static_cast<std::size_t>(e.wall_block_[i]);
+      lifter_of_slot = &e.wall_lifter_[2 * block];
+      wall_hist = &e.wall_history_[block * wall_slots * 3];
+    }
+    for (int c = 0; c < found.count; ++c) {
+      const drum::WallContact& wc = found.items[static_cast<std::size_t>(c)];
+      double* hist = nullptr;
       if constexpr (friction) {
-        const std::int32_t block = e.wall_block_[i];
-        if (block >= 0) {
-          lifter_of_slot = &e.wall_lifter_[2 * static_cast<std::size_t>(block)];
-          wall_hist = &e.wall_history_[static_cast<std::size_t>(block) * wall_slots * 3];
-        } else if (found.count > 0) {
-          part.homeless = std::min(part.homeless, i);  // refresh_walls missed it: a bug
-          found.count = 0;
-        }
-      }
-      for (int c = 0; c < found.count; ++c) {
-        const drum::WallContact& wc = found.items[static_cast<std::size_t>(c)];
-        double* hist = nullptr;
-        if constexpr (friction) {
-          std::size_t slot = 0;
-          if (wc.part == drum::Part::lifter) {
-            if (lifter_of_slot[0] == wc.index) {
-              slot = 3;
-            } else if (lifter_of_slot[1] == wc.index) {
-              slot = 4;
-            } else {
-              // A new lifter contact takes a slot no current contact holds.
-              const bool slot3_held = [&] {
-                for (int o = 0; o < found.count; ++o) {
-                  const auto& other = found.items[static_cast<std::size_t>(o)];
-                  if (other.part == drum::Part::lifter && other.index == lifter_of_slot[0])
-                    return true;
-                }
-                return false;
-              }();
-              slot = slot3_held ? 4 : 3;
-              if constexpr (dissipates)  // the slot's last holder has left it
-                part.spring_work -= ended_wall_energy(i, slot, lifter_of_slot[slot - 3],
-                                                      history_dt, wall_hist + slot * 3);
-              lifter_of_slot[slot - 3] = wc.index;
-              Law::reset(wall_hist + slot * 3);
-            }
+        std::size_t slot = 0;
+        if (wc.part == drum::Part::lifter) {
+          if (lifter_of_slot[0] == wc.index) {
+            slot = 3;
+          } else if (lifter_of_slot[1] == wc.index) {
+            slot = 4;
           } else {
-            slot = static_cast<std::size_t>(wc.part);  // shell 0, end_low 1, end_high 2
-          }
-          used |= 1u << slot;
-          hist = wall_hist + slot * 3;
-        }
-        if (wc.overlap > max_overlap * r[i]) note_overlap(part, i, wc.overlap / r[i], true);
-        const Vec3 v_wall = drum::surface_velocity(omega, wc.point);
-        Vec3 v_rel = vi - v_wall;
-        if constexpr (friction) v_rel += wi.cross(-r[i] * wc.normal);
-        const materials::PairConstants& pc =
-            OneMaterial ? pc_one : table(static_cast<std::size_t>(mat[i]), drum_mat);
-        const contact::PairForce pf = contact::pair_force<Law, dissipates>(
-            pc, wc.normal, wc.overlap, r[i], m[i], v_rel, r[i], 0.0, history_dt, hist);
-        f += pf.force_i;
-        // Drive torque: ((x_c - axis) x F_drum_on_particle) . z (DESIGN.md section 2).
-        const double arm_torque =
-            wc.point.x() * pf.force_i.y() - wc.point.y() * pf.force_i.x();
-        if (wc.part == drum::Part::shell) {
-          part.shell += arm_torque;
-        } else if (wc.part == drum::Part::lifter) {
-          part.lifters += arm_torque;
-        } else {
-          part.ends += arm_torque;
-        }
-        if constexpr (dissipates) {
-          part.damping_power += pf.damping_power;
-          part.loss += pf.loss;
-          diss += pf.dissipative;
-          if constexpr (friction) diss_tq += wc.normal.cross(pf.dissipative) * -r[i];
-        }
-        if constexpr (friction) {
-          tq += pf.torque_i;
-          if constexpr (dissipates) {
-            part.friction_loss += pf.friction_loss;
-            part.spring_work += pf.spring_work;
-          }
-        }
-      }
-      if constexpr (friction) {
-        // Contacts that ended: clear their history and free their lifter slot.
-        const unsigned ended = e.wall_held_[i] & ~used;
-        if (ended != 0) {
-          for (std::size_t slot = 0; slot < wall_slots; ++slot) {
-            if (!(ended & (1u << slot))) continue;
-            if constexpr (dissipates)
-              part.spring_work -= ended_wall_energy(i, slot, slot >= 3 ? lifter_of_slot[slot - 3] : -1,
+            // A new lifter contact takes a slot no current contact holds.
+            const bool slot3_held = [&] {
+              for (int o = 0; o < found.count; ++o) {
+                const auto& other = found.items[static_cast<std::size_t>(o)];
+                if (other.part == drum::Part::lifter && other.index == lifter_of_slot[0])
+                  return true;
+              }
+              return false;
+            }();
+            slot = slot3_held ? 4 : 3;
+            if constexpr (dissipates)  // the slot's last holder has left it
+              part.spring_work -= ended_wall_energy(i, slot, lifter_of_slot[slot - 3],
                                                     history_dt, wall_hist + slot * 3);
-            if (slot >= 3) lifter_of_slot[slot - 3] = -1;
+            lifter_of_slot[slot - 3] = wc.index;
             Law::reset(wall_hist + slot * 3);
           }
+        } else {
+          slot = static_cast<std::size_t>(wc.part);  // shell 0, end_low 1, end_high 2
         }
-        e.wall_held_[i] = static_cast<std::uint8_t>(used);
+        used |= 1u << slot;
+        hist = wall_hist + slot * 3;
       }
-      fx[i] = f.x();
-      fy[i] = f.y();
-      fz[i] = f.z();
+      if (wc.overlap > max_overlap * r[i]) note_overlap(part, i, wc.overlap / r[i], true);
+      const Vec3 v_wall = drum::surface_velocity(omega, wc.point);
+      Vec3 v_rel = vi - v_wall;
+      if constexpr (friction) v_rel += wi.cross(-r[i] * wc.normal);
+      const materials::PairConstants& pc =
+          OneMaterial ? pc_one : table(static_cast<std::size_t>(mat[i]), drum_mat);
+      const contact::PairForce pf = contact::pair_force<Law, dissipates>(
+          pc, wc.normal, wc.overlap, r[i], m[i], v_rel, r[i], 0.0, history_dt, hist);
+      f += pf.force_i;
+      // Drive torque: ((x_c - axis) x F_drum_on_particle) . z (DESIGN.md section 2).
+      const double arm_torque =
+          wc.point.x() * pf.force_i.y() - wc.point.y() * pf.force_i.x();
+      if (wc.part == drum::Part::shell) {
+        part.shell += arm_torque;
+      } else if (wc.part == drum::Part::lifter) {
+        part.lifters += arm_torque;
+      } else {
+        part.ends += arm_torque;
+      }
+      if constexpr (dissipates) {
+        part.damping_power += pf.damping_power;
+        part.loss += pf.loss;
+        diss += pf.dissipative;
+        if constexpr (friction) diss_tq += wc.normal.cross(pf.dissipative) * -r[i];
+      }
+      if constexpr (friction) {
+        tq += pf.torque_i;
+        if constexpr (dissipates) {
+          part.friction_loss += pf.friction_loss;
+          part.spring_work += pf.spring_work;
+        }
+      }
+    }
+    if constexpr (friction) {
+      // Contacts that ended: clear their history and free their lifter slot.
+      const unsigned ended = e.wall_held_[i] & ~used;
+      if (ended != 0) {
+        for (std::size_t slot = 0; slot < wall_slots; ++slot) {
+          if (!(ended & (1u << slot))) continue;
+          if constexpr (dissipates)
+            part.spring_work -= ended_wall_energy(i, slot, slot >= 3 ? lifter_of_slot[slot - 3] : -1,
+                                                  history_dt, wall_hist + slot * 3);
+          if (slot >= 3) lifter_of_slot[slot - 3] = -1;
+          Law::reset(wall_hist + slot * 3);
+        }
+      }
+      e.wall_held_[i] = static_cast<std::uint8_t>(used);
+    }
+    fx[i] = f.x();
+    fy[i] = f.y();
+    fz[i] = f.z();
+    if constexpr (friction) {
       tx[i] = tq.x();
       ty[i] = tq.y();
       tz[i] = tq.z();
-      if (kick) {
-        const Vec3 dv = f * (inv_m[i] * half_dt);
-        vx[i] += dv.x();
-        vy[i] += dv.y();
-        vz[i] += dv.z();
-        [[maybe_unused]] Vec3 dw(0.0, 0.0, 0.0);
+    }
+    if constexpr (dissipates) {
+      dissip[i] = diss.x(), dissip[n + i] = diss.y(), dissip[2 * n + i] = diss.z();
+      if constexpr (friction)
+        dissip[3 * n + i] = diss_tq.x(), dissip[4 * n + i] = diss_tq.y(), dissip[5 * n + i] = diss_tq.z();
+    }
+  };
+
+  // Per particle, in chunks that stay in the first-level cache, three loops: the pair sums
+  // completed (gravity, then what the threads whose rows come before the particle buffered for
+  // it, in thread order), the drum's contacts of the particles near the drum, then (kick) the
+  // second half kick. Each sum takes its terms in the order a loop per particle would, so the
+  // forces are the same to the bit; the bulk pays nothing for the drum. Particles [lo, hi)
+  // belong to thread t.
+  auto particle_pass = [&](int t, double history_dt, bool kick, StepPartial& part) {
+    const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
+    const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
+    constexpr std::size_t chunk = 128;
+    for (std::size_t c0 = lo; c0 < hi; c0 += chunk) {
+      const std::size_t c1 = std::min(c0 + chunk, hi);
+      for (std::size_t i = c0; i < c1; ++i) fy[i] -= m[i] * gravity;
+      for (int b = 0; b < team; ++b) {
+        const std::size_t own_end = e.row_split_[static_cast<std::size_t>(b) + 1];
+        const std::size_t end = e.buffer_end_[static_cast<std::size_t>(b)];
+        const std::size_t from = std::max(c0, own_end), to = std::min(c1, end);
+        if (from >= to) continue;
+        const double* const buf = e.buffers_[static_cast<std::size_t>(b)].data();
+        for (std::size_t q = 0; q < width; ++q) {
+          if (!friction && q % 6 >= 3) continue;  // no torques
+          double* const sum = own[q];
+          const double* const add = buf + q * (end - own_end) - own_end;  // add[k], k >= own_end
+          for (std::size_t i = from; i < to; ++i) sum[i] += add[i];
+        }
+      }
+      // A particle that refresh_walls gave no block of wall history cannot reach the drum before
+      // the next refresh (its margin): it skips the drum. Without friction there are no
+      // blocks, and every particle looks (find_contacts_of gives up early in the bulk).
+      for (std::size_t i = c0; i < c1; ++i)
+        if (!friction || e.wall_block_[i] >= 0) drum_contacts(i, history_dt, part);
+      if (!kick) {  // a step's kick_drift checks it otherwise
+        for (std::size_t i = c0; i < c1; ++i)
+          if (!sound(i)) part.bad = std::min(part.bad, i);
+        continue;
+      }
+      for (std::size_t i = c0; i < c1; ++i) {
+        const double kv = inv_m[i] * half_dt;
+        const double dvx = fx[i] * kv, dvy = fy[i] * kv, dvz = fz[i] * kv;
+        vx[i] += dvx;
+        vy[i] += dvy;
+        vz[i] += dvz;
+        [[maybe_unused]] double dwx = 0.0, dwy = 0.0, dwz = 0.0;
         if constexpr (friction) {
-          dw = tq * (inv_i[i] * half_dt);
-          wx[i] += dw.x();
-          wy[i] += dw.y();
-          wz[i] += dw.z();
+          const double kw = inv_i[i] * half_dt;
+          dwx = tx[i] * kw, dwy = ty[i] * kw, dwz = tz[i] * kw;
+          wx[i] += dwx;
+          wy[i] += dwy;
+          wz[i] += dwz;
         }
         // The dissipating forces worked against the half-step velocities above; what the
         // integrator removes is their work with the full-step ones (Ledger::dissipated).
-        if constexpr (dissipates) part.dissipation_shift -= (diss.dot(dv) + diss_tq.dot(dw)) * dt;
+        if constexpr (dissipates) {
+          const Vec3 diss(dissip[i], dissip[n + i], dissip[2 * n + i]);
+          const Vec3 diss_tq = friction ? Vec3(dissip[3 * n + i], dissip[4 * n + i], dissip[5 * n + i])
+                                        : Vec3(0.0, 0.0, 0.0);
+          part.dissipation_shift -=
+              (diss.dot(Vec3(dvx, dvy, dvz)) + diss_tq.dot(Vec3(dwx, dwy, dwz))) * dt;
+        }
       }
-      // a step's kick_drift checks it otherwise
-      if (!kick && !sound(i)) part.bad = std::min(part.bad, i);
     }
   };
 
@@ -691,11 +719,10 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   auto close_step = [&](const StepPartial* parts, double ledger_dt, bool master, long step) {
     Torque tq;
     double damping = 0.0, friction_loss = 0.0, shift = 0.0, loss = 0.0, spring_work = 0.0;
-    std::size_t bad = std::numeric_limits<std::size_t>::max(), homeless = bad;
+    std::size_t bad = std::numeric_limits<std::size_t>::max();
     const StepPartial* deepest = nullptr;  // the deepest contact beyond max_overlap
     for (int b = 0; b < team; ++b) {
       const StepPartial& p = parts[b];
-      homeless = std::min(homeless, p.homeless);
       if (p.deepest_ratio > (deepest ? deepest->deepest_ratio : 0.0)) deepest = &p;
       tq.shell += p.shell;
       tq.lifters += p.lifters;
@@ -722,13 +749,6 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         e.ledger_.spring_work += spring_work;
       }
       if (observer != nullptr && ledger_dt > 0.0) observer->after_step(step, tq);
-    }
-    if (homeless != std::numeric_limits<std::size_t>::max()) {
-      if (master)
-        error = "internal error: particle " + std::to_string(e.order_[homeless]) +
-                " touches the drum but was given no wall history "
-                "(Engine::Access::refresh_walls); please report it with the scene";
-      return true;
     }
     if (bad != std::numeric_limits<std::size_t>::max()) {
       if (master) error = describe_bad(e, bad);
