@@ -490,6 +490,10 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // drum's contacts, added to the sums of particle i (force, N; torque, N m; with the ledger,
   // the dissipating force and its torque).
   auto drum_contacts = [&](std::size_t i, double history_dt, StepPartial& part) {
+    const Vec3 xi(x[i], y[i], z[i]);
+    drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(
+        geom, e.lifter_angles_, xi, r[i], Lifters ? e.lifter_reach_[i] : drum::no_lifter);
+    if (found.count == 0 && (!friction || e.wall_held_[i] == 0)) return;  // nothing to do
     const double omega = e.omega_;
     Vec3 f(fx[i], fy[i], fz[i]);
     Vec3 tq = friction ? Vec3(tx[i], ty[i], tz[i]) : Vec3(0.0, 0.0, 0.0);
@@ -498,9 +502,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       diss = Vec3(dissip[i], dissip[n + i], dissip[2 * n + i]);
       if constexpr (friction) diss_tq = Vec3(dissip[3 * n + i], dissip[4 * n + i], dissip[5 * n + i]);
     }
-    const Vec3 xi(x[i], y[i], z[i]), vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
-    drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(
-        geom, e.lifter_angles_, xi, r[i], Lifters ? e.lifter_reach_[i] : drum::no_lifter);
+    const Vec3 vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
     [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
     [[maybe_unused]] std::int32_t* lifter_of_slot = nullptr;
     [[maybe_unused]] double* wall_hist = nullptr;
