@@ -626,11 +626,12 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         const std::size_t from = std::max(c0, own_end), to = std::min(c1, end);
         if (from >= to) continue;
         const double* const buf = e.buffers_[static_cast<std::size_t>(b)].data();
+        const std::size_t later = end - own_end;  // particles in thread b's buffer
         for (std::size_t q = 0; q < width; ++q) {
           if (!friction && q % 6 >= 3) continue;  // no torques
           double* const sum = own[q];
-          const double* const add = buf + q * (end - own_end) - own_end;  // add[k], k >= own_end
-          for (std::size_t i = from; i < to; ++i) sum[i] += add[i];
+          const double* const add = buf + q * later;  // particle i at add[i - own_end]
+          for (std::size_t i = from; i < to; ++i) sum[i] += add[i - own_end];
         }
       }
       // A particle that refresh_walls gave no block of wall history cannot reach the drum before
