@@ -317,6 +317,14 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   double* const own[12] = {fx,         fy,         fz,         tx,
                            ty,         tz,         dissip,     dissip + n,
                            dissip + 2 * n, dissip + 3 * n, dissip + 4 * n, dissip + 5 * n};
+  // Sums q, q + 1, q + 2 of particle i (a vector: q = 0 force, 3 torque, 6 and 9 with the
+  // ledger), read and written.
+  auto sums_of = [&](std::size_t q, std::size_t i) {
+    return Vec3(own[q][i], own[q + 1][i], own[q + 2][i]);
+  };
+  auto put_sums = [&](std::size_t q, std::size_t i, const Vec3& v) {
+    own[q][i] = v.x(), own[q + 1][i] = v.y(), own[q + 2][i] = v.z();
+  };
   auto pair_pass = [&](int t, double history_dt, StepPartial& part) {
     const std::size_t row_begin = e.row_split_[static_cast<std::size_t>(t)];
     const std::size_t own_end = e.row_split_[static_cast<std::size_t>(t) + 1];
@@ -495,12 +503,12 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         geom, e.lifter_angles_, xi, r[i], Lifters ? e.lifter_reach_[i] : drum::no_lifter);
     if (found.count == 0 && (!friction || e.wall_held_[i] == 0)) return;  // nothing to do
     const double omega = e.omega_;
-    Vec3 f(fx[i], fy[i], fz[i]);
-    Vec3 tq = friction ? Vec3(tx[i], ty[i], tz[i]) : Vec3(0.0, 0.0, 0.0);
+    Vec3 f = sums_of(0, i);
+    Vec3 tq = friction ? sums_of(3, i) : Vec3(0.0, 0.0, 0.0);
     [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
     if constexpr (dissipates) {
-      diss = Vec3(dissip[i], dissip[n + i], dissip[2 * n + i]);
-      if constexpr (friction) diss_tq = Vec3(dissip[3 * n + i], dissip[4 * n + i], dissip[5 * n + i]);
+      diss = sums_of(6, i);
+      if constexpr (friction) diss_tq = sums_of(9, i);
     }
     const Vec3 vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
     [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
@@ -592,18 +600,11 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       }
       e.wall_held_[i] = static_cast<std::uint8_t>(used);
     }
-    fx[i] = f.x();
-    fy[i] = f.y();
-    fz[i] = f.z();
-    if constexpr (friction) {
-      tx[i] = tq.x();
-      ty[i] = tq.y();
-      tz[i] = tq.z();
-    }
+    put_sums(0, i, f);
+    if constexpr (friction) put_sums(3, i, tq);
     if constexpr (dissipates) {
-      dissip[i] = diss.x(), dissip[n + i] = diss.y(), dissip[2 * n + i] = diss.z();
-      if constexpr (friction)
-        dissip[3 * n + i] = diss_tq.x(), dissip[4 * n + i] = diss_tq.y(), dissip[5 * n + i] = diss_tq.z();
+      put_sums(6, i, diss);
+      if constexpr (friction) put_sums(9, i, diss_tq);
     }
   };
 
@@ -661,9 +662,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         // The dissipating forces worked against the half-step velocities above; what the
         // integrator removes is their work with the full-step ones (Ledger::dissipated).
         if constexpr (dissipates) {
-          const Vec3 diss(dissip[i], dissip[n + i], dissip[2 * n + i]);
-          const Vec3 diss_tq = friction ? Vec3(dissip[3 * n + i], dissip[4 * n + i], dissip[5 * n + i])
-                                        : Vec3(0.0, 0.0, 0.0);
+          const Vec3 diss = sums_of(6, i);
+          const Vec3 diss_tq = friction ? sums_of(9, i) : Vec3(0.0, 0.0, 0.0);
           part.dissipation_shift -=
               (diss.dot(Vec3(dvx, dvy, dvz)) + diss_tq.dot(Vec3(dwx, dwy, dwz))) * dt;
         }
