@@ -98,8 +98,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     a_runs: list[float] = []
     b_runs: list[float] = []
     for k in range(args.pairs):
-        order = (("A", args.build_a, a_runs), ("B", args.build_b, b_runs))
-        for _, build, runs in order if k % 2 == 0 else order[::-1]:
+        order = ((args.build_a, a_runs), (args.build_b, b_runs))
+        for build, runs in order if k % 2 == 0 else order[::-1]:
             runs.append(time_run(build, args.checkpoint, args.threads, args.steps))
         print(f"pair {k + 1}: A {a_runs[-1]:.4e}  B {b_runs[-1]:.4e}  particle-steps/s  "
               f"B/A {b_runs[-1] / a_runs[-1]:.3f}", flush=True)
