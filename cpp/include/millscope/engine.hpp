@@ -271,7 +271,11 @@ class Engine {
                                               // (buffer_end[t] - row_split[t+1]) sums for the
                                               // particles after its rows that they touch
   std::vector<std::size_t> buffer_end_;       // per thread: 1 + the last partner of its rows
-  std::vector<std::size_t> row_split_;        // threads + 1 row boundaries balancing pairs
+  std::vector<std::size_t> row_split_;        // threads + 1 row boundaries balancing the pair
+                                              // pass's cost (Access::split_rows)
+  std::vector<std::size_t> particle_split_;   // threads + 1 particle boundaries balancing the
+                                              // particle pass's and the kick's cost
+                                              // (Access::split_particles)
   std::vector<std::uint32_t> list_moved_;     // the reorder of the list build under way
 
   long step_ = 0;

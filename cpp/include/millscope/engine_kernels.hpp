@@ -168,7 +168,9 @@ struct Engine::Access {
   static void rebuild_begin(Engine& e, int team);
   static void rebuild_end(Engine& e);
   static void refresh_walls(Engine& e);
+  static void keep_wall_history(Engine& e, double margin);
   static void split_rows(Engine& e);
+  static void split_particles(Engine& e);
   static std::string describe_bad(const Engine& e, std::size_t i);
   static std::string describe_overlap(const Engine& e, std::size_t i, double ratio, bool wall);
 };
@@ -612,11 +614,12 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // completed (gravity, then what the threads whose rows come before the particle buffered for
   // it, in thread order), the drum's contacts of the particles near the drum, then (kick) the
   // second half kick. Each sum takes its terms in the order a loop per particle would, so the
-  // forces are the same to the bit; the bulk pays nothing for the drum. Particles [lo, hi)
-  // belong to thread t.
+  // forces are the same to the bit; the bulk pays nothing for the drum. Particles [lo, hi) of
+  // particle_split_ belong to thread t, here and in the kick and drift that follows with no
+  // barrier between.
   auto particle_pass = [&](int t, double history_dt, bool kick, StepPartial& part) {
-    const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
-    const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
+    const std::size_t lo = e.particle_split_[static_cast<std::size_t>(t)];
+    const std::size_t hi = e.particle_split_[static_cast<std::size_t>(t) + 1];
     constexpr std::size_t chunk = 128;  // particles: 1 KiB of each of the ~20 arrays read
     for (std::size_t c0 = lo; c0 < hi; c0 += chunk) {
       const std::size_t c1 = std::min(c0 + chunk, hi);
@@ -674,8 +677,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // First half kick and drift for particles [lo, hi); tracks the largest move since the build
   // and, with `guard` (std::true_type), guards the new state.
   auto kick_drift = [&](int t, StepPartial& part, auto guard) {
-    const std::size_t lo = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
-    const std::size_t hi = n * (static_cast<std::size_t>(t) + 1) / static_cast<std::size_t>(team);
+    const std::size_t lo = e.particle_split_[static_cast<std::size_t>(t)];
+    const std::size_t hi = e.particle_split_[static_cast<std::size_t>(t) + 1];
     double move2 = 0.0;
     bool all_sound = true;  // a flag, not the index, in the loop
     for (std::size_t i = lo; i < hi; ++i) {
