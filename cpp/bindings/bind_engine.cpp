@@ -105,6 +105,12 @@ void register_engine(py::module_& m) {
                              "Guard: the deepest contact allowed, a fraction of the smaller radius")
       .def_property_readonly("list_builds", &en::Engine::list_builds)
       .def_property_readonly("list_pairs", &en::Engine::list_pairs)
+      .def_property_readonly("thread_rows", &en::Engine::thread_rows,
+                             "Thread t's list rows in the pair pass: [thread_rows[t], "
+                             "thread_rows[t+1]), in storage order")
+      .def_property_readonly("thread_particles", &en::Engine::thread_particles,
+                             "Thread t's particles in the particle pass and the kick and drift: "
+                             "[thread_particles[t], thread_particles[t+1]), in storage order")
       .def_property_readonly("bytes_per_particle", &en::Engine::bytes_per_particle)
       .def_property_readonly("step_count", &en::Engine::step_count)
       .def_property_readonly("time", &en::Engine::time)

@@ -19,16 +19,18 @@ namespace millscope::engine {
 
 namespace {
 
-// What a thread's share of the work costs, measured per phase and thread (rdtsc around each
-// phase of the step loop, ceramic4 and balls, 2 threads, 2026-11-25); used to split the work
-// among the threads (Access::split_rows, Access::split_particles) in contiguous blocks.
-// A listed pair that touches costs the pair pass about 4 times one that does not: finding
-// the touching pairs takes about 29 cycles per listed pair, their law in lanes and their sums
-// about 107 per contact.
-constexpr double touching_pair_cost = 4.0;  // in listed pairs that do not touch
-// A particle in contact with the drum costs the particle pass and the kick and drift about 4
-// times one that is not (its wall law and torque, besides the kicks and the pair sums).
-constexpr double drum_contact_cost = 4.0;  // in particles not in contact with it
+// What a thread's share of the work costs, for splitting the work among the threads in
+// contiguous blocks (Access::split_rows, Access::split_particles). Fitted to the cycles each
+// thread spent (rdtsc around each phase of the step loop) between list builds, 2 threads,
+// ceramic4 and balls (2026-11-25): the ratio of the two threads' times against the ratio of
+// their counts, over about 130 intervals between builds per scene.
+// A listed pair that touches costs the pair pass about 6 times one that does not (its law in
+// lanes and its sums, besides the distance test): ceramic4's ratios fit best with 6 to 8,
+// within 1 %; the balls', whose halves touch alike, within 1-4 % for any weight from 1 to 8.
+constexpr double touching_pair_cost = 6.0;  // in listed pairs that do not touch
+// A particle in contact with the drum costs the particle pass and the kick and drift about 3
+// times one that is not (its wall law and torque): ceramic4 fits best with 3.
+constexpr double drum_contact_cost = 3.0;  // in particles not in contact with it
 
 /// Boundaries 0 = split[0] <= split[1] <= ... <= split[team] = n cutting items 0..n-1 into team
 /// contiguous blocks of about equal cost (cost[i] >= 0): block t ends at the first item
@@ -187,7 +189,7 @@ Engine::Engine(Config config)
   dissipative_.assign(variant_.track_energy ? 6 * n_ : 0, 0.0);
   buffers_.assign(static_cast<std::size_t>(threads_), std::vector<double>());
   row_split_.assign(static_cast<std::size_t>(threads_) + 1, 0);
-  particle_split_.assign(static_cast<std::size_t>(threads_) + 1, 0);  // set by refresh_walls
+  particle_split_.assign(static_cast<std::size_t>(threads_) + 1, 0);
   buffer_end_.assign(static_cast<std::size_t>(threads_), 0);
 }
 
@@ -563,6 +565,7 @@ void Engine::restore(const Snapshot& s) {
   // first step builds it, and splits the rows among the threads.
   if (list_.builds() > 0) {
     Access::split_rows(*this);
+    Access::split_particles(*this);
     Access::refresh_walls(*this);
   }
 }
@@ -607,6 +610,7 @@ void Engine::Access::rebuild_end(Engine& e) {
     e.z_ref_[i] = static_cast<float>(e.z_[i]);
   }
   split_rows(e);
+  split_particles(e);
 }
 
 void Engine::Access::refresh_walls(Engine& e) {
@@ -630,7 +634,6 @@ void Engine::Access::refresh_walls(Engine& e) {
     e.lifter_reach_.clear();
   }
   keep_wall_history(e, margin);
-  split_particles(e);
 }
 
 void Engine::Access::keep_wall_history(Engine& e, double margin) {
@@ -665,20 +668,27 @@ void Engine::Access::keep_wall_history(Engine& e, double margin) {
   e.wall_lifter_.swap(lifter);
 }
 
+// The two splits below are set at every list build and at a restore, from what a checkpoint
+// holds (the list and the positions at its build, x_ref_): a restored run splits its work as
+// the saved one did, and so sums in the same order, to the bit.
+
 void Engine::Access::split_particles(Engine& e) {
   // The particles go to threads in contiguous blocks of about equal cost: 1 for a particle,
-  // drum_contact_cost for one that held a wall contact at the last step (friction laws; the
-  // others keep no such record, and split by count). Set at every refresh_walls, before the
-  // pair pass: the particle pass of this step and the kick and drift of the next take it.
+  // drum_contact_cost for one that touched the shell or an end wall at the list build.
+  const drum::Geometry& g = e.config_.geometry;
   std::vector<double> cost(e.n_, 1.0);
-  for (std::size_t i = 0; i < e.wall_held_.size(); ++i)
-    if (e.wall_held_[i] != 0) cost[i] = drum_contact_cost;
+  for (std::size_t i = 0; i < e.n_; ++i) {
+    const double x = e.x_ref_[i], y = e.y_ref_[i], z = e.z_ref_[i], r = e.r_[i];
+    const bool shell = std::hypot(x, y) + r > g.radius;
+    const bool ends = g.end_walls && (z < r || z + r > g.length);
+    if (shell || ends) cost[i] = drum_contact_cost;
+  }
   split_by_cost(cost, static_cast<std::size_t>(e.threads_), e.particle_split_);
 }
 
 void Engine::Access::split_rows(Engine& e) {
   // Rows go to threads in contiguous blocks of about equal cost: a row costs 1 for each
-  // listed pair, touching_pair_cost for one that touches (at the list build).
+  // listed pair, touching_pair_cost for one that touched at the list build.
   const auto& start = e.list_.start();
   const auto& partner = e.list_.partner();
   const std::size_t team = static_cast<std::size_t>(e.threads_);
@@ -686,8 +696,10 @@ void Engine::Access::split_rows(Engine& e) {
   for (std::size_t i = 0; i + 1 < start.size(); ++i) {
     for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
       const std::size_t j = partner[s];
-      const double dx = e.x_[i] - e.x_[j], dy = e.y_[i] - e.y_[j],
-                   dz = e.list_.wrap_dz(e.z_[i] - e.z_[j]), r_sum = e.r_[i] + e.r_[j];
+      const double dx = static_cast<double>(e.x_ref_[i]) - e.x_ref_[j],
+                   dy = static_cast<double>(e.y_ref_[i]) - e.y_ref_[j],
+                   dz = e.list_.wrap_dz(static_cast<double>(e.z_ref_[i]) - e.z_ref_[j]),
+                   r_sum = e.r_[i] + e.r_[j];
       cost[i] += dx * dx + dy * dy + dz * dz < r_sum * r_sum ? touching_pair_cost : 1.0;
     }
   }
