@@ -54,6 +54,21 @@ def test_periodic_ends_use_the_minimum_image(period_z: float) -> None:
     assert listed != brute_force_pairs(pos, r, 0.002)  # pairs across the ends exist
 
 
+def test_a_centre_on_the_period_finds_its_partners_across_it() -> None:
+    """A wrapped z can round to the period itself (z - L floor(z / L) for z just below 0): it
+    bins into the first cell, yet lies at its far face; partners just below the period, in
+    the last cell, are found."""
+    period_z = 0.1
+    pos, r = random_spheres(400, 8, box=(0.2, 0.2, period_z))
+    pos[:30, 2] = period_z
+    pos[30:60, 2] = period_z - 0.004
+    nl = _core.VerletList(0.002, 0, period_z)
+    nl.build(*pos.T.copy(), r)
+    listed = {tuple(p) for p in nl.pairs().tolist()}
+    assert listed == brute_force_pairs(pos, r, 0.002, period_z)
+    assert any(i < 30 <= j < 60 for i, j in listed)  # such pairs exist
+
+
 @pytest.mark.parametrize("team", [1, 3])
 def test_history_follows_its_pair_across_rebuilds(team: int) -> None:
     pos, r = random_spheres(600, 11)

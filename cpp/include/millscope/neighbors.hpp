@@ -7,7 +7,8 @@
 // history next to its partner index, without lookups. A rebuild moves each surviving pair's
 // history to its new slot (a binary search in the old, sorted row) and zeroes new pairs.
 // Rebuilding is O(N) for a bounded density: particles are binned into cubic cells at least
-// 2 r_max + skin wide, and each cell looks at itself and its 26 neighbours.
+// 2 r_max + skin wide, and each particle looks in its cell and the 26 around it, skipping a
+// cell farther than r_i + r_max + skin and the particles before it.
 // Optionally periodic along z with period `period_z` (minimum image).
 //
 // spatial_order() gives the order of the particles cell by cell, the axis with the most cells
@@ -103,26 +104,53 @@ class VerletList {
     std::vector<std::uint32_t> row;
     for (std::size_t i = begin; i < end; ++i) {
       row.clear();
-      const int cx = cell_coord(x[i], lo_[0], 0), cy = cell_coord(y[i], lo_[1], 1),
-                cz = cell_coord(z[i], lo_[2], 2);
+      const double at[3] = {x[i], y[i], z[i]};
+      int c[3];
+      // Squared distance from the particle to the cell beside its own along axis a, below
+      // (face2[a][0]) and above (face2[a][2]); 0 to its own (face2[a][1]), m^2.
+      double face2[3][3];
+      for (int a = 0; a < 3; ++a) {
+        c[a] = cell_coord(at[a], lo_[a], a);
+        // the faces of the cell the particle lies in (along a periodic axis, before wrapping:
+        // z may round to the period itself)
+        const double u = at[a] - lo_[a];
+        const int k = a == 2 && periodic() ? static_cast<int>(std::floor(u / cell_size_[a])) : c[a];
+        const double below = u - k * cell_size_[a];
+        const double above = (k + 1) * cell_size_[a] - u;
+        face2[a][0] = below > 0.0 ? below * below : 0.0;
+        face2[a][1] = 0.0;
+        face2[a][2] = above > 0.0 ? above * above : 0.0;
+      }
+      // No partner's centre lies farther than r_i + r_max + skin: a cell beyond is skipped (the
+      // bound raised by far more than the rounding of the distances).
+      const double reach = (r[i] + r_max_ + skin_) * (1.0 + 1e-9);
+      const double reach2 = reach * reach;
       for (int dz = -1; dz <= 1; ++dz) {
-        int kz = cz + dz;
+        int kz = c[2] + dz;
         if (periodic()) {
           kz = (kz % dims_[2] + dims_[2]) % dims_[2];
         } else if (kz < 0 || kz >= dims_[2]) {
           continue;
         }
         for (int dy = -1; dy <= 1; ++dy) {
-          const int ky = cy + dy;
+          const int ky = c[1] + dy;
           if (ky < 0 || ky >= dims_[1]) continue;
           for (int dx = -1; dx <= 1; ++dx) {
-            const int kx = cx + dx;
+            const int kx = c[0] + dx;
             if (kx < 0 || kx >= dims_[0]) continue;
+            if (face2[0][dx + 1] + face2[1][dy + 1] + face2[2][dz + 1] >= reach2) continue;
+            // A cell holds its particles in ascending order: those after i only.
             const std::size_t cell = index(kx, ky, kz);
-            for (std::uint32_t j = cell_start_[cell]; j < cell_start_[cell + 1]; ++j) {
-              const std::uint32_t p = cell_particles_[j];
-              if (p <= i) continue;
-              if (gap(x, y, z, r, i, p) < skin_) row.push_back(p);
+            const auto first = cell_particles_.begin() + cell_start_[cell];
+            const auto last = cell_particles_.begin() + cell_start_[cell + 1];
+            for (auto it = std::upper_bound(first, last, static_cast<std::uint32_t>(i));
+                 it != last; ++it) {
+              const std::uint32_t p = *it;
+              const double sx = at[0] - x[p], sy = at[1] - y[p], sz = wrap_dz(at[2] - z[p]);
+              const double d2 = sx * sx + sy * sy + sz * sz;
+              // far apart by their squares (no root), or else the gap itself
+              const double far = (r[i] + r[p] + skin_) * (1.0 + 1e-9);
+              if (d2 < far * far && std::sqrt(d2) - r[i] - r[p] < skin_) row.push_back(p);
             }
           }
         }
@@ -228,12 +256,6 @@ class VerletList {
  private:
   bool periodic() const { return period_z_ > 0.0; }
 
-  double gap(const double* x, const double* y, const double* z, const double* r, std::size_t i,
-             std::size_t j) const {
-    const double dx = x[i] - x[j], dy = y[i] - y[j], dz = wrap_dz(z[i] - z[j]);
-    return std::sqrt(dx * dx + dy * dy + dz * dz) - r[i] - r[j];
-  }
-
   int cell_coord(double v, double lo, int axis) const {
     int k = static_cast<int>(std::floor((v - lo) / cell_size_[axis]));
     if (axis == 2 && periodic()) return (k % dims_[2] + dims_[2]) % dims_[2];
@@ -265,6 +287,7 @@ class VerletList {
       }
     }
     if (n == 0) lo_[0] = lo_[1] = lo_[2] = hi[0] = hi[1] = hi[2] = 0.0;
+    r_max_ = r_max;
     const double min_cell = 2.0 * r_max + skin_;
     for (int a = 0; a < 3; ++a) {
       double extent = hi[a] - lo_[a];
@@ -301,6 +324,7 @@ class VerletList {
   std::size_t history_size_;
   double period_z_;
   long builds_ = 0;
+  double r_max_ = 0.0;  // the largest radius at the last binning, m
   double lo_[3] = {0, 0, 0};
   double cell_size_[3] = {1, 1, 1};
   int dims_[3] = {1, 1, 1};
