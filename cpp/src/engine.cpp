@@ -603,6 +603,7 @@ void Engine::Access::rebuild_begin(Engine& e, int team) {
 
 void Engine::Access::rebuild_end(Engine& e) {
   e.list_.finish_build();
+  neighbors::release(e.list_moved_);  // needed only during the build
   refresh_walls(e);
   for (std::size_t i = 0; i < e.n_; ++i) {
     e.x_ref_[i] = static_cast<float>(e.x_[i]);

@@ -32,6 +32,12 @@
 
 namespace millscope::neighbors {
 
+/// Empties v and gives its memory back (`v = {}` would keep the capacity).
+template <class T>
+void release(std::vector<T>& v) {
+  std::vector<T>().swap(v);
+}
+
 class VerletList {
  public:
   /// skin: extra gap kept in the list, m; history_size: doubles of history per pair;
@@ -195,13 +201,15 @@ class VerletList {
     }
   }
 
-  /// Lets go of the old list and of the threads' row buffers (memory per particle counts
-  /// between builds; a build allocates them again).
+  /// Lets go of the old list, the threads' row buffers and the cell grid (memory per particle
+  /// counts between builds; a build allocates them again).
   void finish_build() {
-    old_start_ = {};
-    old_partner_ = {};
-    old_history_ = {};
-    for (auto& rows : rows_of_thread_) rows = {};
+    release(old_start_);
+    release(old_partner_);
+    release(old_history_);
+    for (auto& rows : rows_of_thread_) release(rows);
+    release(cell_start_);
+    release(cell_particles_);
     moved_ = nullptr;
     ++builds_;
   }
@@ -231,12 +239,13 @@ class VerletList {
   }
 
   std::size_t pairs() const { return partner_.size(); }
-  /// Bytes the list keeps between builds: rows, partners, history, the cell grid (and the
-  /// threads' row buffers, empty between builds).
+  /// Bytes the list keeps between builds: rows, partners, history (and the cell grid, the
+  /// threads' row buffers and the list before the build, released by finish_build).
   std::size_t bytes() const {
     auto of = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
     std::size_t total = of(start_) + of(partner_) + of(history_) + of(cell_start_) +
-                        of(cell_particles_) + of(rows_of_thread_);
+                        of(cell_particles_) + of(rows_of_thread_) + of(old_start_) +
+                        of(old_partner_) + of(old_history_);
     for (const auto& rows : rows_of_thread_) total += of(rows);
     return total;
   }
