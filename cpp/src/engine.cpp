@@ -634,15 +634,9 @@ void Engine::Access::refresh_walls(Engine& e) {
   } else {
     e.lifter_reach_.clear();
   }
-  keep_wall_history(e, margin);
-}
-
-void Engine::Access::keep_wall_history(Engine& e, double margin) {
   if (e.wall_block_.empty()) return;  // no friction: no wall history
-  // Blocks of wall history for the particles within `margin` (m) of the shell, an end wall or
-  // a lifter (lifter_reach_), and for any that still holds a contact; packed in particle
-  // order, carried over from the old blocks.
-  const drum::Geometry& g = e.config_.geometry;
+  // Blocks of wall history for the particles near the shell, an end wall or a lifter, and for
+  // any that still holds a contact; packed in particle order, carried over from the old blocks.
   constexpr std::size_t width = wall_slots * 3;
   std::vector<std::int32_t> block(e.n_, -1);
   std::int32_t blocks = 0;

@@ -168,7 +168,6 @@ struct Engine::Access {
   static void rebuild_begin(Engine& e, int team);
   static void rebuild_end(Engine& e);
   static void refresh_walls(Engine& e);
-  static void keep_wall_history(Engine& e, double margin);
   static void split_rows(Engine& e);
   static void split_particles(Engine& e);
   static std::string describe_bad(const Engine& e, std::size_t i);
