@@ -50,6 +50,14 @@ void split_by_cost(const std::vector<double>& cost, std::size_t team,
   }
 }
 
+/// Whether a sphere (centre x, y, z and radius r, m) comes within `margin` (m) of the drum's
+/// shell or, with end walls, of an end wall.
+bool near_shell_or_ends(const drum::Geometry& g, double x, double y, double z, double r,
+                        double margin) {
+  const bool shell = std::hypot(x, y) + r + margin > g.radius;
+  return shell || (g.end_walls && (z - r < margin || z + r + margin > g.length));
+}
+
 [[noreturn]] void invalid(const std::string& name, double value, const std::string& range) {
   std::ostringstream msg;
   msg << name << " = " << value << " is not valid; it must be " << range;
@@ -641,9 +649,8 @@ void Engine::Access::refresh_walls(Engine& e) {
   std::vector<std::int32_t> block(e.n_, -1);
   std::int32_t blocks = 0;
   for (std::size_t i = 0; i < e.n_; ++i) {
-    const double rho = std::hypot(e.x_[i], e.y_[i]), r = e.r_[i];
-    bool near = rho + r + margin > g.radius || e.wall_held_[i] != 0;
-    if (g.end_walls) near = near || e.z_[i] - r < margin || e.z_[i] + r + margin > g.length;
+    bool near = e.wall_held_[i] != 0 ||
+                near_shell_or_ends(g, e.x_[i], e.y_[i], e.z_[i], e.r_[i], margin);
     if (g.lifters > 0) near = near || e.lifter_reach_[i] != drum::no_lifter;
     if (near) block[i] = blocks++;
   }
@@ -670,14 +677,10 @@ void Engine::Access::refresh_walls(Engine& e) {
 void Engine::Access::split_particles(Engine& e) {
   // The particles go to threads in contiguous blocks of about equal cost: 1 for a particle,
   // drum_contact_cost for one that touched the shell or an end wall at the list build.
-  const drum::Geometry& g = e.config_.geometry;
   std::vector<double> cost(e.n_, 1.0);
-  for (std::size_t i = 0; i < e.n_; ++i) {
-    const double x = e.x_ref_[i], y = e.y_ref_[i], z = e.z_ref_[i], r = e.r_[i];
-    const bool shell = std::hypot(x, y) + r > g.radius;
-    const bool ends = g.end_walls && (z < r || z + r > g.length);
-    if (shell || ends) cost[i] = drum_contact_cost;
-  }
+  for (std::size_t i = 0; i < e.n_; ++i)
+    if (near_shell_or_ends(e.config_.geometry, e.x_ref_[i], e.y_ref_[i], e.z_ref_[i], e.r_[i], 0.0))
+      cost[i] = drum_contact_cost;
   split_by_cost(cost, static_cast<std::size_t>(e.threads_), e.particle_split_);
 }
 
