@@ -44,6 +44,23 @@ def test_pairs_equal_brute_force(n: int, seed: int, team: int) -> None:
         assert dist[i, j] - r[i] - r[j] < skin
 
 
+@pytest.mark.parametrize("team", [1, 2])
+def test_pairs_equal_brute_force_in_cell_order(team: int) -> None:
+    """Stored cell by cell, as the engine stores them, every cell holds a run of consecutive
+    indices, which the build scans without a search and tests in lanes."""
+    pos, r = random_spheres(1500, 5)
+    nl = _core.VerletList(0.003, 3)
+    order = nl.spatial_order(*pos.T.copy(), r)
+    assert sorted(order.tolist()) == list(range(len(r)))  # a permutation
+    pos, r = pos[order], r[order]
+    nl.build(*pos.T.copy(), r, team=team)
+    listed = {tuple(p) for p in nl.pairs().tolist()}
+    assert len(listed) == len(nl.pairs())
+    assert listed == brute_force_pairs(pos, r, 0.003)
+    # in that order, a particle's partners lie close behind it in storage
+    assert np.median(np.diff(nl.pairs(), axis=1)) < 0.1 * len(r)
+
+
 @pytest.mark.parametrize("period_z", [0.1, 0.03])
 def test_periodic_ends_use_the_minimum_image(period_z: float) -> None:
     pos, r = random_spheres(400, 7, box=(0.2, 0.2, period_z))

@@ -31,6 +31,22 @@ void register_neighbors(py::module_& m) {
           arg("x"), arg("y"), arg("z"), arg("r"), arg("team") = 1,
           "Rebuilds the list; `team` > 1 builds it in that many blocks of rows, in the phases "
           "the engine's threads run in parallel (the list is the same).")
+      .def(
+          "spatial_order",
+          [](nb::VerletList& self, const InArray& x, const InArray& y, const InArray& z,
+             const InArray& r) {
+            const auto n = static_cast<std::size_t>(x.shape(0));
+            for (const auto* a : {&y, &z, &r})
+              if (a->ndim() != 1 || static_cast<std::size_t>(a->shape(0)) != n)
+                throw std::invalid_argument("x, y, z and r must be 1-D arrays of equal length");
+            std::vector<std::uint32_t> order =
+                self.spatial_order(data_1d(x, "x"), y.data(), z.data(), r.data(), n);
+            return py::array_t<std::uint32_t>(static_cast<py::ssize_t>(order.size()),
+                                              order.data());
+          },
+          arg("x"), arg("y"), arg("z"), arg("r"),
+          "The particles cell by cell (the order the engine stores them in at a list build): "
+          "order[k] is the particle to store at k.")
       .def("pairs",
            [](const nb::VerletList& self) {
              const auto& start = self.start();

@@ -38,6 +38,30 @@ void release(std::vector<T>& v) {
   std::vector<T>().swap(v);
 }
 
+// The lanes are compiled for AVX2 and for the x86-64 baseline where the loader can choose by
+// the CPU (as the engine's contact lanes).
+#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__))
+#define MILLSCOPE_LIST_TARGETS __attribute__((target_clones("avx2", "default")))
+#else
+#define MILLSCOPE_LIST_TARGETS
+#endif
+
+/// near[k] = whether candidate k (centre x[k], y[k], z[k], radius r[k]; k < m) passes the
+/// list's first, squared test against a sphere at xi, yi, zi of radius ri (VerletList::
+/// is_partner, in the same operations): |d|^2 < ((ri + r_k + skin) (1 + 1e-9))^2. Not for a
+/// periodic axis.
+MILLSCOPE_LIST_TARGETS inline void near_in_lanes(double xi, double yi, double zi, double ri,
+                                                 double skin, const double* x, const double* y,
+                                                 const double* z, const double* r,
+                                                 std::size_t m, unsigned char* near) {
+#pragma omp simd
+  for (std::size_t k = 0; k < m; ++k) {
+    const double sx = xi - x[k], sy = yi - y[k], sz = zi - z[k];
+    const double far = (ri + r[k] + skin) * (1.0 + 1e-9);
+    near[k] = sx * sx + sy * sy + sz * sz < far * far;
+  }
+}
+
 class VerletList {
  public:
   /// skin: extra gap kept in the list, m; history_size: doubles of history per pair;
@@ -149,14 +173,19 @@ class VerletList {
             const std::size_t cell = index(kx, ky, kz);
             const auto first = cell_particles_.begin() + cell_start_[cell];
             const auto last = cell_particles_.begin() + cell_start_[cell + 1];
-            for (auto it = std::upper_bound(first, last, static_cast<std::uint32_t>(i));
-                 it != last; ++it) {
+            if (first == last || last[-1] <= i) continue;  // none after i
+            // Stored in cell order (the engine's reorder), a cell's particles are a run of
+            // consecutive indices: those after i are found without a search and tested in
+            // lanes.
+            if (!periodic() && last[-1] - *first == static_cast<std::uint32_t>(last - first) - 1) {
+              scan_run(i, x, y, z, r, std::max<std::size_t>(*first, i + 1),
+                       last[-1] + std::size_t{1}, row);
+              continue;
+            }
+            const auto after = std::upper_bound(first, last, static_cast<std::uint32_t>(i));
+            for (auto it = after; it != last; ++it) {
               const std::uint32_t p = *it;
-              const double sx = at[0] - x[p], sy = at[1] - y[p], sz = wrap_dz(at[2] - z[p]);
-              const double d2 = sx * sx + sy * sy + sz * sz;
-              // far apart by their squares (no root), or else the gap itself
-              const double far = (r[i] + r[p] + skin_) * (1.0 + 1e-9);
-              if (d2 < far * far && std::sqrt(d2) - r[i] - r[p] < skin_) row.push_back(p);
+              if (is_partner(i, x, y, z, r, p)) row.push_back(p);
             }
           }
         }
@@ -258,6 +287,33 @@ class VerletList {
   long builds() const { return builds_; }
 
   /// z displacement by the minimum image for periodic ends, m.
+  // Whether p lies within the skin of i (the list's rule): far apart by their squares (no
+  // root), or else the gap itself.
+  bool is_partner(std::size_t i, const double* x, const double* y, const double* z,
+                  const double* r, std::size_t p) const {
+    const double sx = x[i] - x[p], sy = y[i] - y[p], sz = wrap_dz(z[i] - z[p]);
+    const double d2 = sx * sx + sy * sy + sz * sz;
+    const double far = (r[i] + r[p] + skin_) * (1.0 + 1e-9);
+    return d2 < far * far && std::sqrt(d2) - r[i] - r[p] < skin_;
+  }
+
+  // The partners of i among particles [p0, p1) (no periodic axis), in ascending order: the
+  // squared test in lanes over blocks of candidates (near_in_lanes), is_partner for the few
+  // that pass it.
+  void scan_run(std::size_t i, const double* x, const double* y, const double* z,
+                const double* r, std::size_t p0, std::size_t p1,
+                std::vector<std::uint32_t>& row) const {
+    constexpr std::size_t block = 64;
+    unsigned char near[block];
+    for (std::size_t b0 = p0; b0 < p1; b0 += block) {
+      const std::size_t m = std::min(block, p1 - b0);
+      near_in_lanes(x[i], y[i], z[i], r[i], skin_, x + b0, y + b0, z + b0, r + b0, m, near);
+      for (std::size_t k = 0; k < m; ++k)
+        if (near[k] && is_partner(i, x, y, z, r, b0 + k))
+          row.push_back(static_cast<std::uint32_t>(b0 + k));
+    }
+  }
+
   double wrap_dz(double dz) const {
     return periodic() ? dz - period_z_ * std::round(dz / period_z_) : dz;
   }
