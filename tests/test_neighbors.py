@@ -113,5 +113,7 @@ def test_bad_arguments() -> None:
     nl = _core.VerletList(0.001, 3)
     with pytest.raises(ValueError, match="equal length"):
         nl.build(np.zeros(3), np.zeros(2), np.zeros(3), np.ones(3))
+    with pytest.raises(ValueError, match="equal length"):
+        nl.spatial_order(np.zeros(3), np.zeros(3), np.zeros(3), np.ones(4))
     with pytest.raises(ValueError, match="team = 0 is not valid; it must be >= 1"):
         nl.build(np.zeros(3), np.zeros(3), np.zeros(3), np.ones(3), team=0)

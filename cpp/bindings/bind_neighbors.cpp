@@ -4,6 +4,18 @@
 
 namespace millscope::bindings {
 
+namespace {
+/// The count of spheres given as centres x, y, z and radii r, which must be 1-D and alike.
+std::size_t spheres_count(const InArray& x, const InArray& y, const InArray& z,
+                          const InArray& r) {
+  const auto n = static_cast<std::size_t>(x.shape(0));
+  for (const auto* a : {&y, &z, &r})
+    if (a->ndim() != 1 || static_cast<std::size_t>(a->shape(0)) != n)
+      throw std::invalid_argument("x, y, z and r must be 1-D arrays of equal length");
+  return n;
+}
+}  // namespace
+
 void register_neighbors(py::module_& m) {
   namespace nb = millscope::neighbors;
   using py::arg;
@@ -16,10 +28,7 @@ void register_neighbors(py::module_& m) {
           "build",
           [](nb::VerletList& self, const InArray& x, const InArray& y, const InArray& z,
              const InArray& r, int team) {
-            const auto n = static_cast<std::size_t>(x.shape(0));
-            for (const auto* a : {&y, &z, &r})
-              if (a->ndim() != 1 || static_cast<std::size_t>(a->shape(0)) != n)
-                throw std::invalid_argument("x, y, z and r must be 1-D arrays of equal length");
+            const std::size_t n = spheres_count(x, y, z, r);
             if (team < 1)
               throw std::invalid_argument("team = " + std::to_string(team) +
                                           " is not valid; it must be >= 1");
@@ -35,10 +44,7 @@ void register_neighbors(py::module_& m) {
           "spatial_order",
           [](nb::VerletList& self, const InArray& x, const InArray& y, const InArray& z,
              const InArray& r) {
-            const auto n = static_cast<std::size_t>(x.shape(0));
-            for (const auto* a : {&y, &z, &r})
-              if (a->ndim() != 1 || static_cast<std::size_t>(a->shape(0)) != n)
-                throw std::invalid_argument("x, y, z and r must be 1-D arrays of equal length");
+            const std::size_t n = spheres_count(x, y, z, r);
             std::vector<std::uint32_t> order =
                 self.spatial_order(data_1d(x, "x"), y.data(), z.data(), r.data(), n);
             return py::array_t<std::uint32_t>(static_cast<py::ssize_t>(order.size()),
