@@ -18,6 +18,7 @@
 #include "millscope/contact.hpp"
 #include "millscope/drum.hpp"
 #include "millscope/engine.hpp"
+#include "millscope/lanes.hpp"
 
 namespace millscope::engine {
 
@@ -62,15 +63,6 @@ struct ContactBatch {
       v->resize(need);
   }
 };
-
-// The lanes are compiled twice where the loader can choose by the CPU (GCC or Clang, x86-64
-// Linux): for AVX2, four doubles to a register, and for the x86-64 baseline, SSE2 and two. AVX2
-// alone brings no fused multiply-add, so both give the same bits.
-#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__))
-#define MILLSCOPE_LANE_TARGETS __attribute__((target_clones("avx2", "default")))
-#else
-#define MILLSCOPE_LANE_TARGETS
-#endif
 
 /// The paper's law (contact::HertzMindlin: Hertz (1), viscous damping (2), Mindlin no-slip
 /// spring (5)-(7) with the Coulomb limit (8), unclamped) for every contact of a block, written

@@ -30,6 +30,8 @@
 #include <utility>
 #include <vector>
 
+#include "millscope/lanes.hpp"
+
 namespace millscope::neighbors {
 
 /// Empties v and gives its memory back (`v = {}` would keep the capacity).
@@ -38,19 +40,11 @@ void release(std::vector<T>& v) {
   std::vector<T>().swap(v);
 }
 
-// The lanes are compiled for AVX2 and for the x86-64 baseline where the loader can choose by
-// the CPU (as the engine's contact lanes).
-#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__))
-#define MILLSCOPE_LIST_TARGETS __attribute__((target_clones("avx2", "default")))
-#else
-#define MILLSCOPE_LIST_TARGETS
-#endif
-
 /// near[k] = whether candidate k (centre x[k], y[k], z[k], radius r[k]; k < m) passes the
 /// list's first, squared test against a sphere at xi, yi, zi of radius ri (VerletList::
 /// is_partner, in the same operations): |d|^2 < ((ri + r_k + skin) (1 + 1e-9))^2. Not for a
 /// periodic axis.
-MILLSCOPE_LIST_TARGETS inline void near_in_lanes(double xi, double yi, double zi, double ri,
+MILLSCOPE_LANE_TARGETS inline void near_in_lanes(double xi, double yi, double zi, double ri,
                                                  double skin, const double* x, const double* y,
                                                  const double* z, const double* r,
                                                  std::size_t m, unsigned char* near) {
@@ -286,7 +280,6 @@ class VerletList {
   double skin() const { return skin_; }
   long builds() const { return builds_; }
 
-  /// z displacement by the minimum image for periodic ends, m.
   // Whether p lies within the skin of i (the list's rule): far apart by their squares (no
   // root), or else the gap itself.
   bool is_partner(std::size_t i, const double* x, const double* y, const double* z,
@@ -314,6 +307,7 @@ class VerletList {
     }
   }
 
+  /// z displacement by the minimum image for periodic ends, m.
   double wrap_dz(double dz) const {
     return periodic() ? dz - period_z_ * std::round(dz / period_z_) : dz;
   }
