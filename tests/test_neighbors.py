@@ -115,5 +115,7 @@ def test_bad_arguments() -> None:
         nl.build(np.zeros(3), np.zeros(2), np.zeros(3), np.ones(3))
     with pytest.raises(ValueError, match="equal length"):
         nl.spatial_order(np.zeros(3), np.zeros(3), np.zeros(3), np.ones(4))
+    with pytest.raises(ValueError, match="1-D arrays of equal length"):
+        nl.spatial_order(np.zeros(()), np.zeros(1), np.zeros(1), np.ones(1))
     with pytest.raises(ValueError, match="team = 0 is not valid; it must be >= 1"):
         nl.build(np.zeros(3), np.zeros(3), np.zeros(3), np.ones(3), team=0)

@@ -8,8 +8,8 @@ namespace {
 /// The count of spheres given as centres x, y, z and radii r, which must be 1-D and alike.
 std::size_t spheres_count(const InArray& x, const InArray& y, const InArray& z,
                           const InArray& r) {
-  const auto n = static_cast<std::size_t>(x.shape(0));
-  for (const auto* a : {&y, &z, &r})
+  const auto n = static_cast<std::size_t>(x.ndim() == 1 ? x.shape(0) : 0);
+  for (const auto* a : {&x, &y, &z, &r})
     if (a->ndim() != 1 || static_cast<std::size_t>(a->shape(0)) != n)
       throw std::invalid_argument("x, y, z and r must be 1-D arrays of equal length");
   return n;
@@ -45,10 +45,8 @@ void register_neighbors(py::module_& m) {
           [](nb::VerletList& self, const InArray& x, const InArray& y, const InArray& z,
              const InArray& r) {
             const std::size_t n = spheres_count(x, y, z, r);
-            std::vector<std::uint32_t> order =
-                self.spatial_order(data_1d(x, "x"), y.data(), z.data(), r.data(), n);
-            return py::array_t<std::uint32_t>(static_cast<py::ssize_t>(order.size()),
-                                              order.data());
+            return to_numpy(
+                self.spatial_order(data_1d(x, "x"), y.data(), z.data(), r.data(), n));
           },
           arg("x"), arg("y"), arg("z"), arg("r"),
           "The particles cell by cell (the order the engine stores them in at a list build): "

@@ -33,8 +33,8 @@ constexpr double touching_pair_cost = 6.0;  // in listed pairs that do not touch
 constexpr double drum_contact_cost = 3.0;  // in particles not in contact with it
 
 /// Boundaries 0 = split[0] <= split[1] <= ... <= split[team] = n cutting items 0..n-1 into team
-/// contiguous blocks of about equal cost (cost[i] >= 0): block t ends at the first item
-/// before which the cost reaches t / team of the total.
+/// contiguous blocks of about equal cost (cost[i] >= 0): block t is [split[t], split[t+1]),
+/// split[t] the first item before which the cost reaches t / team of the total.
 void split_by_cost(const std::vector<double>& cost, std::size_t team,
                    std::vector<std::size_t>& split) {
   const std::size_t n = cost.size();

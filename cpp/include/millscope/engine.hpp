@@ -169,8 +169,7 @@ class Engine {
   std::size_t list_pairs() const { return list_.pairs(); }
   /// The threads' shares of the work: thread t takes the list rows [rows[t], rows[t+1]) in
   /// the pair pass and the particles [particles[t], particles[t+1]) in the particle pass and
-  /// the kick and drift (set at each list build and restore, balancing their cost; all 0
-  /// before the first build).
+  /// the kick and drift (set at each list build and at a restore, balancing their cost).
   const std::vector<std::size_t>& thread_rows() const { return row_split_; }
   const std::vector<std::size_t>& thread_particles() const { return particle_split_; }
   /// Bytes held per particle: state, wall history, neighbour list and its history, buffers.

@@ -40,10 +40,15 @@ void release(std::vector<T>& v) {
   std::vector<T>().swap(v);
 }
 
+/// The list's squared test lets pass pairs up to this much (relative) beyond r_i + r_j + skin,
+/// far more than the rounding of the distances, so that it never rejects a pair the exact
+/// test (a root) would list.
+inline constexpr double squared_test_slack = 1e-9;
+
 /// near[k] = whether candidate k (centre x[k], y[k], z[k], radius r[k]; k < m) passes the
 /// list's first, squared test against a sphere at xi, yi, zi of radius ri (VerletList::
-/// is_partner, in the same operations): |d|^2 < ((ri + r_k + skin) (1 + 1e-9))^2. Not for a
-/// periodic axis.
+/// is_partner, in the same operations): |d|^2 < ((ri + r_k + skin) (1 + squared_test_slack))^2.
+/// Not for a periodic axis.
 MILLSCOPE_LANE_TARGETS inline void near_in_lanes(double xi, double yi, double zi, double ri,
                                                  double skin, const double* x, const double* y,
                                                  const double* z, const double* r,
@@ -51,7 +56,7 @@ MILLSCOPE_LANE_TARGETS inline void near_in_lanes(double xi, double yi, double zi
 #pragma omp simd
   for (std::size_t k = 0; k < m; ++k) {
     const double sx = xi - x[k], sy = yi - y[k], sz = zi - z[k];
-    const double far = (ri + r[k] + skin) * (1.0 + 1e-9);
+    const double far = (ri + r[k] + skin) * (1.0 + squared_test_slack);
     near[k] = sx * sx + sy * sy + sz * sz < far * far;
   }
 }
@@ -147,7 +152,7 @@ class VerletList {
       }
       // No partner's centre lies farther than r_i + r_max + skin: a cell beyond is skipped (the
       // bound raised by far more than the rounding of the distances).
-      const double reach = (r[i] + r_max_ + skin_) * (1.0 + 1e-9);
+      const double reach = (r[i] + r_max_ + skin_) * (1.0 + squared_test_slack);
       const double reach2 = reach * reach;
       for (int dz = -1; dz <= 1; ++dz) {
         int kz = c[2] + dz;
@@ -280,13 +285,19 @@ class VerletList {
   double skin() const { return skin_; }
   long builds() const { return builds_; }
 
+  /// z displacement by the minimum image for periodic ends, m.
+  double wrap_dz(double dz) const {
+    return periodic() ? dz - period_z_ * std::round(dz / period_z_) : dz;
+  }
+
+ private:
   // Whether p lies within the skin of i (the list's rule): far apart by their squares (no
   // root), or else the gap itself.
   bool is_partner(std::size_t i, const double* x, const double* y, const double* z,
                   const double* r, std::size_t p) const {
     const double sx = x[i] - x[p], sy = y[i] - y[p], sz = wrap_dz(z[i] - z[p]);
     const double d2 = sx * sx + sy * sy + sz * sz;
-    const double far = (r[i] + r[p] + skin_) * (1.0 + 1e-9);
+    const double far = (r[i] + r[p] + skin_) * (1.0 + squared_test_slack);
     return d2 < far * far && std::sqrt(d2) - r[i] - r[p] < skin_;
   }
 
@@ -307,12 +318,6 @@ class VerletList {
     }
   }
 
-  /// z displacement by the minimum image for periodic ends, m.
-  double wrap_dz(double dz) const {
-    return periodic() ? dz - period_z_ * std::round(dz / period_z_) : dz;
-  }
-
- private:
   bool periodic() const { return period_z_ > 0.0; }
 
   int cell_coord(double v, double lo, int axis) const {
@@ -362,7 +367,7 @@ class VerletList {
     axes_[2] = 2;
     std::stable_sort(axes_, axes_ + 3, [this](int a, int b) { return dims_[a] > dims_[b]; });
     // With fewer than 3 cells along a periodic axis, neighbouring cells would be seen twice;
-    // the unique() in build() removes the duplicates.
+    // the unique() in find_rows() removes the duplicates.
     const std::size_t cells = static_cast<std::size_t>(dims_[0]) * static_cast<std::size_t>(dims_[1]) *
                               static_cast<std::size_t>(dims_[2]);
     cell_start_.assign(cells + 1, 0);
