@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -238,7 +239,9 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // The paper's law without the ledger computes its pair contacts in SIMD lanes
   // (contact_forces_in_lanes); the ledger's kernels and the other laws take pair_force.
   constexpr bool in_lanes = std::is_same_v<Law, contact::HertzMindlin> && !Tally;
-  std::vector<ContactBatch> batches(in_lanes ? static_cast<std::size_t>(team) : 0);
+  // Each thread makes its own (see the parallel region), so that its arrays come from that
+  // thread's allocator arena and share no cache line with another thread's.
+  std::vector<std::unique_ptr<ContactBatch>> batches(static_cast<std::size_t>(team));
   auto partials_of = [&](long s) { return partial.data() + static_cast<std::size_t>(s & 1) * team; };
   std::string error;
 
@@ -333,7 +336,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     const std::uint32_t* const partner = e.list_.partner().data();
     double* const history = e.list_.history().data();
     if constexpr (in_lanes) {
-      ContactBatch& b = batches[static_cast<std::size_t>(t)];
+      ContactBatch& b = *batches[static_cast<std::size_t>(t)];
       for (std::size_t block = row_begin; block < own_end;) {
         // 1. The touching pairs of the rows [block, block_end); a listed pair that does not
         // touch has its history cleared.
@@ -768,6 +771,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   {
     const int t = omp_get_thread_num();
     const bool master = t == 0;
+    if constexpr (in_lanes) batches[static_cast<std::size_t>(t)] = std::make_unique<ContactBatch>();
     bool failed = false;  // the same in every thread
     if (!e.forces_valid_) {
       // The forces of the initial state; the tangential history does not advance.
