@@ -45,9 +45,15 @@ void release(std::vector<T>& v) {
 /// test (a root) would list.
 inline constexpr double squared_test_slack = 1e-9;
 
+/// The distance, m, below which the squared test lets a pair of radii ri and rj (m) pass with
+/// this skin (m): (ri + rj + skin) (1 + squared_test_slack).
+inline double squared_test_reach(double ri, double rj, double skin) {
+  return (ri + rj + skin) * (1.0 + squared_test_slack);
+}
+
 /// near[k] = whether candidate k (centre x[k], y[k], z[k], radius r[k]; k < m) passes the
 /// list's first, squared test against a sphere at xi, yi, zi of radius ri (VerletList::
-/// is_partner, in the same operations): |d|^2 < ((ri + r_k + skin) (1 + squared_test_slack))^2.
+/// is_partner, in the same operations): |d|^2 < squared_test_reach(ri, r_k, skin)^2.
 /// Not for a periodic axis.
 MILLSCOPE_LANE_TARGETS inline void near_in_lanes(double xi, double yi, double zi, double ri,
                                                  double skin, const double* x, const double* y,
@@ -56,7 +62,7 @@ MILLSCOPE_LANE_TARGETS inline void near_in_lanes(double xi, double yi, double zi
 #pragma omp simd
   for (std::size_t k = 0; k < m; ++k) {
     const double sx = xi - x[k], sy = yi - y[k], sz = zi - z[k];
-    const double far = (ri + r[k] + skin) * (1.0 + squared_test_slack);
+    const double far = squared_test_reach(ri, r[k], skin);
     near[k] = sx * sx + sy * sy + sz * sz < far * far;
   }
 }
@@ -152,7 +158,7 @@ class VerletList {
       }
       // No partner's centre lies farther than r_i + r_max + skin: a cell beyond is skipped (the
       // bound raised by far more than the rounding of the distances).
-      const double reach = (r[i] + r_max_ + skin_) * (1.0 + squared_test_slack);
+      const double reach = squared_test_reach(r[i], r_max_, skin_);
       const double reach2 = reach * reach;
       for (int dz = -1; dz <= 1; ++dz) {
         int kz = c[2] + dz;
@@ -297,7 +303,7 @@ class VerletList {
                   const double* r, std::size_t p) const {
     const double sx = x[i] - x[p], sy = y[i] - y[p], sz = wrap_dz(z[i] - z[p]);
     const double d2 = sx * sx + sy * sy + sz * sz;
-    const double far = (r[i] + r[p] + skin_) * (1.0 + squared_test_slack);
+    const double far = squared_test_reach(r[i], r[p], skin_);
     return d2 < far * far && std::sqrt(d2) - r[i] - r[p] < skin_;
   }
 
