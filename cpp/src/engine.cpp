@@ -14,6 +14,7 @@
 #include "millscope/contact.hpp"
 #include "millscope/engine_kernels.hpp"
 #include "millscope/timestep.hpp"
+#include "millscope/touching_pairs.hpp"
 
 namespace millscope::engine {
 
@@ -168,6 +169,11 @@ std::string Variant::describe() const {
   s += end_walls ? ", end walls" : ", periodic ends";
   if (!track_energy && law != Law::elastic) s += ", dissipation not booked";
   return s;
+}
+
+bool Engine::wide_pair_search() const {
+  return config_.wide_pair_search && variant_.law == Variant::Law::hertz_mindlin &&
+         !variant_.track_energy && wide_pairs_supported();
 }
 
 Engine::Engine(Config config)

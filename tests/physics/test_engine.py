@@ -21,7 +21,7 @@ G = 9.81
 def make_engine(radius, *, restitution=0.5, friction=0.15, material=STEEL, drum_radius=0.44,
                 length=0.315, end_walls=True, lifters=0, gravity=G, dt_fraction=0.2, threads=1,
                 positions=None, velocities=None, spins=None,
-                reorder=True):  # type: ignore[no-untyped-def]
+                **options):  # type: ignore[no-untyped-def]
     radius = np.atleast_1d(np.asarray(radius, dtype=float))
     geometry = _core.DrumGeometry(drum_radius, length, end_walls, lifters,
                                   0.03 if lifters else 0.0, 0.02 if lifters else 0.0)
@@ -29,7 +29,7 @@ def make_engine(radius, *, restitution=0.5, friction=0.15, material=STEEL, drum_
     engine = _core.Engine([_core.Material(*material)], np.array([[restitution]]),
                           np.array([[friction]]), 0, geometry, radius,
                           np.zeros(len(radius), np.int32), dt, gravity=gravity, threads=threads,
-                          reorder=reorder)
+                          **options)
     if positions is not None:
         engine.positions = np.asarray(positions, dtype=float)
     if velocities is not None:
@@ -341,6 +341,64 @@ def test_storage_order_is_invisible_to_the_caller() -> None:
     assert np.allclose(torque_a, torque_b, rtol=0, atol=1e-9 * scale)
     assert np.allclose(a.positions, b.positions, rtol=0, atol=1e-12)
     assert np.allclose(a.velocities, b.velocities, rtol=0, atol=1e-9)
+
+
+def cpu_flags() -> set[str]:
+    try:
+        with open("/proc/cpuinfo") as f:
+            return next((set(line.split(":")[1].split()) for line in f
+                         if line.startswith("flags")), set())
+    except OSError:
+        return set()
+
+
+@pytest.mark.parametrize("end_walls", [True, False])
+def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None:
+    """The pair pass finds its touching pairs 8 at a time in AVX-512 registers where the CPU
+    has them (touching_pairs.hpp), else one at a time. Both must give the run that the energy
+    ledger's kernel gives (contact::pair_force, a pair at a time): the same positions,
+    velocities, spins and torque, to the bit. Polydisperse, with friction, periodic ends or end
+    walls, and one big sphere stored first, whose list row holds more pairs than a block of the
+    wide search (224): that row makes a block of its own."""
+    rng = np.random.default_rng(2)
+    R, L, r_small, r_big = 0.2, 0.3, 0.008, 0.1
+    centre = np.array([0.0, 0.0, L / 2])
+    # 400 small spheres 0.5 mm off the big one (a Fibonacci lattice on the sphere: about
+    # 19 mm apart, more than a small diameter), and more on a grid around them
+    k = np.arange(400) + 0.5
+    polar, azimuth = np.arccos(1 - 2 * k / 400), np.pi * (1 + 5**0.5) * k
+    around = np.column_stack([np.sin(polar) * np.cos(azimuth), np.sin(polar) * np.sin(azimuth),
+                              np.cos(polar)])
+    shell = centre + (r_big + r_small + 0.0005) * around
+    grid = lattice(4000, r_small, R - 0.01, L, rng, pitch=2.2)
+    grid = grid[np.linalg.norm(grid - centre, axis=1) > r_big + 3.5 * r_small][:800]
+    positions = np.vstack([centre, shell, grid])
+    radius = np.concatenate([[r_big], np.full(len(shell), r_small),
+                             rng.uniform(0.6 * r_small, r_small, len(grid))])
+    speed = rng.normal(0.0, 1.0, positions.shape)  # m/s: the list is rebuilt now and then
+    soft = (7860.0, 81e8, 0.3)
+    runs = {}
+    for name, options in {"wide": dict(track_energy=False),
+                          "portable": dict(track_energy=False, wide_pair_search=False),
+                          "ledger": dict(track_energy=True)}.items():
+        eng = make_engine(radius, material=soft, drum_radius=R, length=L, lifters=8,
+                          end_walls=end_walls, positions=positions, velocities=speed,
+                          reorder=False, threads=2, **options)
+        eng.start_rotation(4.0)
+        first = eng.advance_sampled(eng.dt, False, 1)[:, 1]
+        start = eng.snapshot()["list_start"]
+        assert start[1] - start[0] > 224  # the big sphere's row (stored first: reorder=False)
+        torque = np.concatenate([first, eng.advance_sampled(eng.dt, False, 1500)[:, 1]])
+        runs[name] = (eng, torque)
+    wide, portable, ledger = (runs[k][0] for k in ("wide", "portable", "ledger"))
+    assert wide.wide_pair_search == ({"avx512f", "avx512vl"} <= cpu_flags())
+    assert not portable.wide_pair_search and not ledger.wide_pair_search
+    assert wide.list_builds >= 2 and np.abs(runs["ledger"][1]).max() > 0
+    for name in ("wide", "portable"):
+        eng, torque = runs[name]
+        assert np.array_equal(torque, runs["ledger"][1]), name
+        for field in ("positions", "velocities", "spins"):
+            assert np.array_equal(getattr(eng, field), getattr(ledger, field)), (name, field)
 
 
 def test_snapshot_restore_continues_bit_for_bit() -> None:

@@ -59,6 +59,9 @@ struct Config {
   bool reorder = true;              // store the particles in cell order at each list build
   bool track_energy = true;         // book the dissipated energy (Ledger); off: only drive_work
   int threads = 1;
+  // Find the touching pairs of the pair pass 8 at a time in AVX-512 registers where the CPU has
+  // them (touching_pairs.hpp; same result to the bit); false: the portable search.
+  bool wide_pair_search = true;
   // Guards: a step that breaks one stops the run with a message (step, particle, values, hint).
   double max_speed = std::numeric_limits<double>::infinity();  // m/s, > 0; a particle faster
   double max_overlap = 0.5;  // in (0, 1]: a contact deeper than this x the smaller radius (the
@@ -165,6 +168,10 @@ class Engine {
   double skin() const { return list_.skin(); }
   double max_speed() const { return config_.max_speed; }      // guard, m/s
   double max_overlap() const { return config_.max_overlap; }  // guard, of the smaller radius
+  /// Whether the pair pass finds its touching pairs with the wide search: asked for
+  /// (Config::wide_pair_search), run by this CPU, and a scene whose contacts are computed in
+  /// lanes (the paper's law without the energy ledger).
+  bool wide_pair_search() const;
   long list_builds() const { return list_.builds(); }
   std::size_t list_pairs() const { return list_.pairs(); }
   /// The threads' shares of the work: thread t takes the list rows [rows[t], rows[t+1]) in

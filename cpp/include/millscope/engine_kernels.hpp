@@ -20,6 +20,7 @@
 #include "millscope/drum.hpp"
 #include "millscope/engine.hpp"
 #include "millscope/lanes.hpp"
+#include "millscope/touching_pairs.hpp"
 
 namespace millscope::engine {
 
@@ -53,7 +54,15 @@ struct ContactBatch {
   std::vector<double> tix, tiy, tiz, tjx, tjy, tjz;  // torques on i and on j, N m
   std::vector<double> row_sum;  // force, N, and torque, N m, on each row's particle: 6 a row
 
-  ContactBatch() : row_sum(6 * max_rows) { reserve(4 * max_contacts); }
+  // The wide search (touching_pairs_wide) takes blocks of at most this many listed pairs (or
+  // one row that holds more), and its scratch holds each listed pair's row.
+  static constexpr std::size_t max_listed = 224;
+  std::vector<std::uint32_t> slot_row;
+
+  ContactBatch() : row_sum(6 * max_rows) {
+    reserve(4 * max_contacts);
+    reserve_listed(max_listed);
+  }
   /// Room for `more` contacts beyond size (one row may hold many).
   void reserve(std::size_t more) {
     const std::size_t need = size + more;
@@ -62,6 +71,13 @@ struct ContactBatch {
     for (auto* v : {&dx, &dy, &dz, &sx, &sy, &sz, &overlap, &fx, &fy, &fz, &tix, &tiy, &tiz, &tjx,
                     &tjy, &tjz})
       v->resize(need);
+  }
+  /// Room for a block of `listed` listed pairs in the wide search, which stores whole
+  /// registers of 8 past its last entry.
+  void reserve_listed(std::size_t listed) {
+    const std::size_t need = listed + 8;
+    if (need > slot_row.size()) slot_row.resize(need);
+    if (need > overlap.size()) reserve(need - size);
   }
 };
 
@@ -239,6 +255,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // The paper's law without the ledger computes its pair contacts in SIMD lanes
   // (contact_forces_in_lanes); the ledger's kernels and the other laws take pair_force.
   constexpr bool in_lanes = std::is_same_v<Law, contact::HertzMindlin> && !Tally;
+  // ... and finds them with the wide search where the CPU can (Engine::wide_pair_search).
+  [[maybe_unused]] const bool wide = in_lanes && e.wide_pair_search();
   // Each thread makes its own (see the parallel region), so that its arrays come from that
   // thread's allocator arena and share no cache line with another thread's.
   std::vector<std::unique_ptr<ContactBatch>> batches(static_cast<std::size_t>(team));
@@ -336,7 +354,70 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     const std::uint32_t* const partner = e.list_.partner().data();
     double* const history = e.list_.history().data();
     if constexpr (in_lanes) {
+      // Each block of rows in three phases: 1. its touching pairs, 2. their forces in lanes,
+      // 3. (sum_block) the springs back, and the sums: those on j straight into j, those on i
+      // into the block's row sums, added to i last. As in the loop below, to the bit: i
+      // receives from the rows before it (j > i in a half list), then its own row's sum.
+      auto sum_block = [&](ContactBatch& b, std::size_t block, std::size_t block_end) {
+        double* const row_sum = b.row_sum.data();  // 6 per row of the block
+        std::fill(row_sum, row_sum + 6 * (block_end - block), 0.0);
+        for (std::size_t c = 0; c < b.size; ++c) {
+          const std::size_t i = b.i[c], j = b.j[c];
+          double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
+          hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
+          const double r_min = std::min(r[i], r[j]), overlap = b.overlap[c];
+          if (overlap > max_overlap * r_min) note_overlap(part, i, overlap / r_min, false);
+          const double on_i[6] = {b.fx[c], b.fy[c], b.fz[c], b.tix[c], b.tiy[c], b.tiz[c]};
+          const double on_j[6] = {-b.fx[c], -b.fy[c], -b.fz[c], b.tjx[c], b.tjy[c], b.tjz[c]};
+          double* const sum_i = row_sum + 6 * (i - block);
+          const bool j_own = j < own_end;
+          const std::size_t k = j_own ? j : j - own_end;
+          double* const* const dst = j_own ? own : buffered;
+          for (std::size_t q = 0; q < 6; ++q) {
+            sum_i[q] += on_i[q];
+            dst[q][k] += on_j[q];
+          }
+        }
+        for (std::size_t i = block; i < block_end; ++i)
+          for (std::size_t q = 0; q < 6; ++q) own[q][i] += row_sum[6 * (i - block) + q];
+      };
       ContactBatch& b = *batches[static_cast<std::size_t>(t)];
+#if MILLSCOPE_WIDE_PAIRS
+      if (wide) {
+        for (std::size_t block = row_begin; block < own_end;) {
+          // 1. The touching pairs of the rows [block, block_end), which hold at most
+          // max_listed listed pairs (or one row that holds more).
+          const std::size_t row_limit = std::min(own_end, block + ContactBatch::max_rows);
+          std::size_t block_end = block + 1;
+          while (block_end < row_limit &&
+                 start[block_end + 1] - start[block] <= ContactBatch::max_listed)
+            ++block_end;
+          const std::uint32_t s0 = start[block], s1 = start[block_end];
+          b.size = 0;
+          b.reserve_listed(s1 - s0);
+          b.size = touching_pairs_wide<!EndWalls>(
+              block, block_end, start, partner, x, y, z, r, n, period, b.slot_row.data(),
+              {b.i.data(), b.j.data(), b.slot.data(), b.dx.data(), b.dy.data(), b.dz.data()});
+          for (std::size_t c = 0; c < b.size; ++c) {
+            const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
+            b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
+            b.pair[c] = OneMaterial ? 0u
+                                    : static_cast<std::uint32_t>(table.size() * mat[b.i[c]] +
+                                                                 mat[b.j[c]]);
+          }
+          // A listed pair that does not touch has its history cleared; those that touch get
+          // theirs back in phase 3.
+          std::fill(history + static_cast<std::size_t>(s0) * hs,
+                    history + static_cast<std::size_t>(s1) * hs, 0.0);
+          // 2. Their forces, several at a time.
+          contact_forces_in_lanes(b, OneMaterial ? &pc_one : &table(0, 0), r, inv_m, vx, vy, vz,
+                                  wx, wy, wz, history_dt);
+          sum_block(b, block, block_end);
+          block = block_end;
+        }
+        return;
+      }
+#endif
       for (std::size_t block = row_begin; block < own_end;) {
         // 1. The touching pairs of the rows [block, block_end); a listed pair that does not
         // touch has its history cleared.
@@ -372,30 +453,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         // 2. Their forces, several at a time.
         contact_forces_in_lanes(b, OneMaterial ? &pc_one : &table(0, 0), r, inv_m, vx, vy, vz,
                                 wx, wy, wz, history_dt);
-        // 3. Springs back, and the sums: those on j straight into j, those on i into the
-        // block's row sums, added to i last. As in the loop below, to the bit: i receives
-        // from the rows before it (j > i in a half list), then its own row's sum.
-        double* const row_sum = b.row_sum.data();  // 6 per row of the block
-        std::fill(row_sum, row_sum + 6 * (block_end - block), 0.0);
-        for (std::size_t c = 0; c < b.size; ++c) {
-          const std::size_t i = b.i[c], j = b.j[c];
-          double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
-          hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
-          const double r_min = std::min(r[i], r[j]), overlap = b.overlap[c];
-          if (overlap > max_overlap * r_min) note_overlap(part, i, overlap / r_min, false);
-          const double on_i[6] = {b.fx[c], b.fy[c], b.fz[c], b.tix[c], b.tiy[c], b.tiz[c]};
-          const double on_j[6] = {-b.fx[c], -b.fy[c], -b.fz[c], b.tjx[c], b.tjy[c], b.tjz[c]};
-          double* const sum_i = row_sum + 6 * (i - block);
-          const bool j_own = j < own_end;
-          const std::size_t k = j_own ? j : j - own_end;
-          double* const* const dst = j_own ? own : buffered;
-          for (std::size_t q = 0; q < 6; ++q) {
-            sum_i[q] += on_i[q];
-            dst[q][k] += on_j[q];
-          }
-        }
-        for (std::size_t i = block; i < block_end; ++i)
-          for (std::size_t q = 0; q < 6; ++q) own[q][i] += row_sum[6 * (i - block) + q];
+        sum_block(b, block, block_end);
         block = block_end;
       }
       return;
