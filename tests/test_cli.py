@@ -11,6 +11,8 @@ import pytest
 from millscope.cli import main
 from millscope.synthetic import SyntheticTorque, synthetic_record
 
+from .cpu import runs_wide_pair_search
+
 
 @pytest.fixture
 def csv_record(tmp_path):
@@ -24,6 +26,8 @@ def test_info_runs_as_a_module() -> None:
     out = subprocess.run([sys.executable, "-m", "millscope", "info"], capture_output=True,
                          text=True, check=True).stdout
     assert "FFTW" in out and "fftw-3" in out and "OpenMP" in out and "threads" in out
+    search = next(line for line in out.splitlines() if line.startswith("pair search"))
+    assert ("AVX-512" in search) == runs_wide_pair_search()
 
 
 def test_analyze_prints_the_figures_and_writes_plots(csv_record, tmp_path, capsys) -> None:

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "millscope/dsp.hpp"
+#include "millscope/touching_pairs.hpp"
 
 namespace py = pybind11;
 
@@ -38,6 +39,8 @@ PYBIND11_MODULE(_core, m) {
     info["eigen_version"] = std::to_string(EIGEN_WORLD_VERSION) + "." +
                             std::to_string(EIGEN_MAJOR_VERSION) + "." +
                             std::to_string(EIGEN_MINOR_VERSION);
+    // whether the pair pass can find its touching pairs in AVX-512 registers on this CPU
+    info["wide_pair_search"] = millscope::engine::wide_pairs_supported();
     return info;
   }, "Facts about how this extension was built.");
 }

@@ -63,6 +63,9 @@ def cmd_info(_: argparse.Namespace) -> int:
     print(f"OpenMP            {info['openmp_version']}, {info['openmp_max_threads']} threads")
     print(f"FFTW              {info['fftw_version']}")
     print(f"Eigen             {info['eigen_version']}")
+    search = ("AVX-512, 8 listed pairs at a time" if info["wide_pair_search"]
+              else "portable, one listed pair at a time (no AVX-512 F and VL here)")
+    print(f"pair search       {search}")
     return 0
 
 

@@ -14,6 +14,8 @@ import pytest
 from millscope import _core
 from millscope.contact import hertz_contact_time, hertz_max_overlap, pair_properties, rayleigh_time
 
+from ..cpu import runs_wide_pair_search
+
 STEEL = (7860.0, 81e9, 0.3)  # density kg/m^3, shear modulus Pa, Poisson ratio (Table 2)
 G = 9.81
 
@@ -343,15 +345,6 @@ def test_storage_order_is_invisible_to_the_caller() -> None:
     assert np.allclose(a.velocities, b.velocities, rtol=0, atol=1e-9)
 
 
-def cpu_flags() -> set[str]:
-    try:
-        with open("/proc/cpuinfo") as f:
-            return next((set(line.split(":")[1].split()) for line in f
-                         if line.startswith("flags")), set())
-    except OSError:
-        return set()
-
-
 @pytest.mark.parametrize("end_walls", [True, False])
 def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None:
     """The pair pass finds its touching pairs 8 at a time in AVX-512 registers where the CPU
@@ -391,7 +384,7 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
         torque = np.concatenate([first, eng.advance_sampled(eng.dt, False, 1500)[:, 1]])
         runs[name] = (eng, torque)
     wide, portable, ledger = (runs[k][0] for k in ("wide", "portable", "ledger"))
-    assert wide.wide_pair_search == ({"avx512f", "avx512vl"} <= cpu_flags())
+    assert wide.wide_pair_search == runs_wide_pair_search()
     assert not portable.wide_pair_search and not ledger.wide_pair_search
     assert wide.list_builds >= 2 and np.abs(runs["ledger"][1]).max() > 0
     for name in ("wide", "portable"):

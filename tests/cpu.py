@@ -1,0 +1,18 @@
+"""What this machine's CPU offers, read from /proc/cpuinfo (Linux), independently of the build."""
+
+from __future__ import annotations
+
+
+def cpu_flags() -> set[str]:
+    """The CPU's feature flags (empty where /proc/cpuinfo cannot be read)."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            return next((set(line.split(":")[1].split()) for line in f
+                         if line.startswith("flags")), set())
+    except OSError:
+        return set()
+
+
+def runs_wide_pair_search() -> bool:
+    """Whether the engine's AVX-512 pair search (touching_pairs.hpp) can run here."""
+    return {"avx512f", "avx512vl"} <= cpu_flags()
