@@ -393,7 +393,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
                  start[block_end + 1] - start[block] <= ContactBatch::max_listed)
             ++block_end;
           const std::uint32_t s0 = start[block], s1 = start[block_end];
-          b.size = 0;
+          b.size = 0;  // reserve_listed counts its room from size
           b.reserve_listed(s1 - s0);
           b.size = touching_pairs_wide<!EndWalls>(
               block, block_end, start, partner, x, y, z, r, n, period, b.slot_row.data(),
