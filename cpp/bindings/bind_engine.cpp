@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "millscope/engine.hpp"
+#include "millscope/touching_pairs.hpp"
 #include "numpy_view.hpp"
 
 namespace millscope::bindings {
@@ -59,6 +60,7 @@ void register_engine(py::module_& m) {
   using IntArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
 
   m.attr("GUARD_INTERVAL") = en::guard_interval;  // steps between the state guards' looks
+  m.attr("WIDE_BLOCK_LISTED") = en::wide_block_listed;  // listed pairs in a wide-search block
   py::class_<en::Engine>(m, "Engine", "The DEM engine: state, step loop, torque (engine.hpp).")
       .def(py::init([](std::vector<materials::Material> materials, const InArray& restitution,
                        const InArray& friction, int drum_material, const drum::Geometry& geometry,

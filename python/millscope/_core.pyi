@@ -63,6 +63,7 @@ Vec3 = ArrayLike  # three floats
 DEFAULT_DT_FRACTION: float
 MAX_DT_FRACTION: float
 GUARD_INTERVAL: int
+WIDE_BLOCK_LISTED: int
 
 class Material:
     def __init__(self, density: float, shear_modulus: float, poisson: float) -> None: ...

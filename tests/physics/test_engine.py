@@ -352,7 +352,7 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
     ledger's kernel gives (contact::pair_force, a pair at a time): the same positions,
     velocities, spins and torque, to the bit. Polydisperse, with friction, periodic ends or end
     walls, and one big sphere stored first, whose list row holds more pairs than a block of the
-    wide search (224): that row makes a block of its own."""
+    wide search (_core.WIDE_BLOCK_LISTED): that row makes a block of its own."""
     rng = np.random.default_rng(2)
     R, L, r_small, r_big = 0.2, 0.3, 0.008, 0.1
     centre = np.array([0.0, 0.0, L / 2])
@@ -380,7 +380,8 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
         eng.start_rotation(4.0)
         first = eng.advance_sampled(eng.dt, False, 1)[:, 1]
         start = eng.snapshot()["list_start"]
-        assert start[1] - start[0] > 224  # the big sphere's row (stored first: reorder=False)
+        # the big sphere's row (stored first: reorder=False)
+        assert start[1] - start[0] > _core.WIDE_BLOCK_LISTED
         torque = np.concatenate([first, eng.advance_sampled(eng.dt, False, 1500)[:, 1]])
         runs[name] = (eng, torque)
     wide, portable, ledger = (runs[k][0] for k in ("wide", "portable", "ledger"))

@@ -54,14 +54,12 @@ struct ContactBatch {
   std::vector<double> tix, tiy, tiz, tjx, tjy, tjz;  // torques on i and on j, N m
   std::vector<double> row_sum;  // force, N, and torque, N m, on each row's particle: 6 a row
 
-  // The wide search (touching_pairs_wide) takes blocks of at most this many listed pairs (or
-  // one row that holds more), and its scratch holds each listed pair's row.
-  static constexpr std::size_t max_listed = 224;
+  // The wide search's scratch (touching_pairs_wide): each listed pair's row.
   std::vector<std::uint32_t> slot_row;
 
   ContactBatch() : row_sum(6 * max_rows) {
     reserve(4 * max_contacts);
-    reserve_listed(max_listed);
+    reserve_listed(wide_block_listed);
   }
   /// Room for `more` contacts beyond size (one row may hold many).
   void reserve(std::size_t more) {
@@ -386,11 +384,11 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       if (wide) {
         for (std::size_t block = row_begin; block < own_end;) {
           // 1. The touching pairs of the rows [block, block_end), which hold at most
-          // max_listed listed pairs (or one row that holds more).
+          // wide_block_listed listed pairs (or one row that holds more).
           const std::size_t row_limit = std::min(own_end, block + ContactBatch::max_rows);
           std::size_t block_end = block + 1;
           while (block_end < row_limit &&
-                 start[block_end + 1] - start[block] <= ContactBatch::max_listed)
+                 start[block_end + 1] - start[block] <= wide_block_listed)
             ++block_end;
           const std::uint32_t s0 = start[block], s1 = start[block_end];
           b.size = 0;  // reserve_listed counts its room from size

@@ -27,6 +27,10 @@
 
 namespace millscope::engine {
 
+/// The pair pass with the wide search takes blocks of rows holding at most this many listed
+/// pairs (or one row that holds more): about 70 contacts in the pilot mill's charges.
+inline constexpr std::size_t wide_block_listed = 224;
+
 /// Where touching_pairs_wide writes the touching pairs: row i, partner j, list slot, and
 /// x_i - x_j (m), one entry per pair. Each array needs room for 8 entries beyond the last pair
 /// it can receive (whole registers are stored).
