@@ -400,8 +400,8 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
             const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
             b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
             b.pair[c] = OneMaterial ? 0u
-                                    : static_cast<std::uint32_t>(table.size() * mat[b.i[c]] +
-                                                                 mat[b.j[c]]);
+                                    : static_cast<std::uint32_t>(table.index(mat[b.i[c]],
+                                                                             mat[b.j[c]]));
           }
           // A listed pair that does not touch has its history cleared; those that touch get
           // theirs back in phase 3.
@@ -425,7 +425,6 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
                block_end - block < ContactBatch::max_rows) {
           const std::size_t i = block_end;
           const double xi = x[i], yi = y[i], zi = z[i], ri = r[i];
-          const std::size_t pair_row = OneMaterial ? 0 : table.size() * mat[i];
           b.reserve(start[i + 1] - start[i]);
           for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
             const std::size_t j = partner[s];
@@ -442,7 +441,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
             b.i[c] = static_cast<std::uint32_t>(i);
             b.j[c] = static_cast<std::uint32_t>(j);
             b.slot[c] = s;
-            b.pair[c] = static_cast<std::uint32_t>(OneMaterial ? 0 : pair_row + mat[j]);
+            b.pair[c] = static_cast<std::uint32_t>(OneMaterial ? 0 : table.index(mat[i], mat[j]));
             b.dx[c] = dx, b.dy[c] = dy, b.dz[c] = dz;
             b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
           }

@@ -186,9 +186,12 @@ class PairTable {
   std::size_t size() const { return n_; }
   const Material& material(std::size_t i) const { return materials_.at(i); }
 
+  /// Where the constants of materials i and j lie from &(*this)(0, 0) (kernels that read the
+  /// table through an index per contact).
+  std::size_t index(std::size_t i, std::size_t j) const { return i * n_ + j; }
   /// The constants of materials i and j (no bounds check: the hot loop reads this).
   const PairConstants& operator()(std::size_t i, std::size_t j) const {
-    return pairs_[i * n_ + j];
+    return pairs_[index(i, j)];
   }
   /// Bounds-checked access.
   const PairConstants& at(std::size_t i, std::size_t j) const {
@@ -197,7 +200,7 @@ class PairTable {
                                   std::to_string(j) + ") is not valid; the table has " +
                                   std::to_string(n_) + " materials");
     }
-    return pairs_[i * n_ + j];
+    return pairs_[index(i, j)];
   }
 
  private:
