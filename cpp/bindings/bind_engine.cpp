@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 
 #include "millscope/engine.hpp"
 #include "millscope/touching_pairs.hpp"
@@ -67,7 +68,7 @@ void register_engine(py::module_& m) {
                        const InArray& radius, const IntArray& material, double dt, double gravity,
                        double skin, bool clamp_normal, int threads, bool reorder,
                        bool track_energy, double max_speed, double max_overlap,
-                       bool wide_pair_search) {
+                       bool wide_pair_search, std::optional<bool> prefetch_partners) {
              en::Config c;
              c.materials = std::move(materials);
              c.restitution.assign(restitution.data(), restitution.data() + restitution.size());
@@ -88,6 +89,7 @@ void register_engine(py::module_& m) {
              c.max_speed = max_speed;
              c.max_overlap = max_overlap;
              c.wide_pair_search = wide_pair_search;
+             c.prefetch_partners = prefetch_partners;
              return en::Engine(std::move(c));
            }),
            arg("materials"), arg("restitution"), arg("friction"), arg("drum_material"),
@@ -95,7 +97,7 @@ void register_engine(py::module_& m) {
            arg("skin") = 0.0, arg("clamp_normal") = false, arg("threads") = 1,
            arg("reorder") = true, arg("track_energy") = true,
            arg("max_speed") = std::numeric_limits<double>::infinity(), arg("max_overlap") = 0.5,
-           arg("wide_pair_search") = true)
+           arg("wide_pair_search") = true, arg("prefetch_partners") = py::none())
       .def_property_readonly("size", &en::Engine::size)
       .def_property_readonly("dt", &en::Engine::dt)
       .def_property_readonly("threads", &en::Engine::threads)
@@ -112,6 +114,11 @@ void register_engine(py::module_& m) {
                              "Whether the pair pass finds its touching pairs 8 at a time in "
                              "AVX-512 registers (asked for, run by this CPU, and the paper's law "
                              "without the energy ledger); the results are the same either way")
+      .def_property_readonly("prefetch_partners", &en::Engine::prefetch_partners,
+                             "Whether the wide search asks ahead for the partners' state: asked "
+                             "for, or (prefetch_partners=None) while the engine holds more bytes "
+                             "than the CPU's last-level cache; the results are the same either "
+                             "way")
       .def_property_readonly("list_builds", &en::Engine::list_builds)
       .def_property_readonly("list_pairs", &en::Engine::list_pairs)
       .def_property_readonly("thread_rows", &en::Engine::thread_rows,

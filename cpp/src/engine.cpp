@@ -4,12 +4,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <numeric>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
+
 
 #include "millscope/contact.hpp"
 #include "millscope/engine_kernels.hpp"
@@ -176,9 +179,43 @@ bool Engine::wide_pair_search() const {
          !variant_.track_energy && wide_pairs_supported();
 }
 
+namespace {
+
+/// Bytes of the CPU's last-level cache, as Linux describes CPU 0's caches
+/// (/sys/devices/system/cpu/cpu0/cache/index*/: level, type, size as "32768K"); 32 MiB where it
+/// does not. (sysconf(_SC_LEVEL3_CACHE_SIZE) is not asked: on an AMD EPYC virtual machine
+/// with a 32 MiB third level, glibc gave 320 MiB.)
+double last_level_cache_bytes() {
+  int best_level = 0;
+  double best_bytes = 32.0 * 1024 * 1024;
+  for (int index = 0; index < 16; ++index) {
+    const std::string dir =
+        "/sys/devices/system/cpu/cpu0/cache/index" + std::to_string(index) + "/";
+    std::ifstream level_file(dir + "level"), type_file(dir + "type"), size_file(dir + "size");
+    int level = 0;
+    std::string type, size;
+    if (!(level_file >> level) || !(type_file >> type) || !(size_file >> size)) break;
+    if (type == "Instruction" || level <= best_level || size.empty()) continue;
+    double bytes = std::strtod(size.c_str(), nullptr);
+    if (size.back() == 'K') bytes *= 1024;
+    if (size.back() == 'M') bytes *= 1024 * 1024;
+    if (bytes > 0) best_level = level, best_bytes = bytes;
+  }
+  return best_bytes;
+}
+
+}  // namespace
+
+bool Engine::prefetch_partners() const {
+  if (!wide_pair_search()) return false;
+  if (config_.prefetch_partners.has_value()) return *config_.prefetch_partners;
+  return bytes_per_particle() * static_cast<double>(n_) > cache_bytes_;
+}
+
 Engine::Engine(Config config)
     : config_((validate(config), std::move(config))),
       n_(config_.radius.size()),
+      cache_bytes_(last_level_cache_bytes()),
       dt_(config_.dt),
       threads_(config_.threads),
       pairs_(config_.materials, config_.restitution, config_.friction),

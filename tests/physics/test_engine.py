@@ -350,9 +350,11 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
     """The pair pass finds its touching pairs 8 at a time in AVX-512 registers where the CPU
     has them (touching_pairs.hpp), else one at a time. Both must give the run that the energy
     ledger's kernel gives (contact::pair_force, a pair at a time): the same positions,
-    velocities, spins and torque, to the bit. Polydisperse, with friction, periodic ends or end
-    walls, and one big sphere stored first, whose list row holds more pairs than a block of the
-    wide search (_core.WIDE_BLOCK_LISTED): that row makes a block of its own."""
+    velocities, spins and torque, to the bit; so must the wide search told to prefetch the
+    partners' state (which it does unasked only where the data exceed the last-level cache).
+    Polydisperse, with friction, periodic ends or end walls, and one big sphere stored first,
+    whose list row holds more pairs than a block of the wide search
+    (_core.WIDE_BLOCK_LISTED): that row makes a block of its own."""
     rng = np.random.default_rng(2)
     R, L, r_small, r_big = 0.2, 0.3, 0.008, 0.1
     centre = np.array([0.0, 0.0, L / 2])
@@ -372,6 +374,7 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
     soft = (7860.0, 81e8, 0.3)
     runs = {}
     for name, options in {"wide": dict(track_energy=False),
+                          "prefetch": dict(track_energy=False, prefetch_partners=True),
                           "portable": dict(track_energy=False, wide_pair_search=False),
                           "ledger": dict(track_energy=True)}.items():
         eng = make_engine(radius, material=soft, drum_radius=R, length=L, lifters=8,
@@ -384,11 +387,17 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
         assert start[1] - start[0] > _core.WIDE_BLOCK_LISTED
         torque = np.concatenate([first, eng.advance_sampled(eng.dt, False, 1500)[:, 1]])
         runs[name] = (eng, torque)
-    wide, portable, ledger = (runs[k][0] for k in ("wide", "portable", "ledger"))
+    wide, prefetch, portable, ledger = (runs[k][0]
+                                        for k in ("wide", "prefetch", "portable", "ledger"))
     assert wide.wide_pair_search == runs_wide_pair_search()
     assert not portable.wide_pair_search and not ledger.wide_pair_search
+    # 1200 spheres hold well under a megabyte: no prefetching unless asked (and only the wide
+    # search prefetches)
+    assert wide.bytes_per_particle * wide.size < 2**20 and not wide.prefetch_partners
+    assert prefetch.prefetch_partners == runs_wide_pair_search()
+    assert not portable.prefetch_partners and not ledger.prefetch_partners
     assert wide.list_builds >= 2 and np.abs(runs["ledger"][1]).max() > 0
-    for name in ("wide", "portable"):
+    for name in ("wide", "prefetch", "portable"):
         eng, torque = runs[name]
         assert np.array_equal(torque, runs["ledger"][1]), name
         for field in ("positions", "velocities", "spins"):

@@ -34,6 +34,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,6 +63,10 @@ struct Config {
   // Find the touching pairs of the pair pass 8 at a time in AVX-512 registers where the CPU has
   // them (touching_pairs.hpp; same result to the bit); false: the portable search.
   bool wide_pair_search = true;
+  // Whether the wide search asks for the state of the partners it will read a few dozen rows
+  // ahead (touching_pairs.hpp, PartnerPrefetch; same results to the bit). Unset: when the
+  // engine's data exceed the last-level cache (Engine::prefetch_partners).
+  std::optional<bool> prefetch_partners;
   // Guards: a step that breaks one stops the run with a message (step, particle, values, hint).
   double max_speed = std::numeric_limits<double>::infinity();  // m/s, > 0; a particle faster
   double max_overlap = 0.5;  // in (0, 1]: a contact deeper than this x the smaller radius (the
@@ -172,6 +177,11 @@ class Engine {
   /// (Config::wide_pair_search), run by this CPU, and a scene whose contacts are computed in
   /// lanes (the paper's law without the energy ledger).
   bool wide_pair_search() const;
+  /// Whether the wide search prefetches the partners' state: asked for
+  /// (Config::prefetch_partners) or, unset, when the engine holds more bytes than the CPU's
+  /// last-level cache (then a step reads its state from memory; below, the prefetches only
+  /// cost). Only the wide search prefetches.
+  bool prefetch_partners() const;
   long list_builds() const { return list_.builds(); }
   std::size_t list_pairs() const { return list_.pairs(); }
   /// The threads' shares of the work: thread t takes the list rows [rows[t], rows[t+1]) in
@@ -250,6 +260,7 @@ class Engine {
 
   Config config_;
   std::size_t n_;
+  double cache_bytes_;  // the CPU's last-level cache, bytes (prefetch_partners())
   double dt_;
   int threads_;
   Variant variant_;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -255,6 +256,13 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   constexpr bool in_lanes = std::is_same_v<Law, contact::HertzMindlin> && !Tally;
   // ... and finds them with the wide search where the CPU can (Engine::wide_pair_search).
   [[maybe_unused]] const bool wide = in_lanes && e.wide_pair_search();
+  // ... asking ahead for the state of the partners where the data exceed the caches: their
+  // positions and radii (the search), velocities, spins and inverse masses (the law in lanes).
+  [[maybe_unused]] const bool prefetch = wide && e.prefetch_partners();
+  PartnerPrefetch ahead;
+  for (const double* a :
+       std::initializer_list<const double*>{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m})
+    ahead.arrays[ahead.count++] = a;
   // Each thread makes its own (see the parallel region), so that its arrays come from that
   // thread's allocator arena and share no cache line with another thread's.
   std::vector<std::unique_ptr<ContactBatch>> batches(static_cast<std::size_t>(team));
@@ -393,9 +401,14 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           const std::uint32_t s0 = start[block], s1 = start[block_end];
           b.size = 0;  // reserve_listed counts its room from size
           b.reserve_listed(s1 - s0);
-          b.size = touching_pairs_wide<!EndWalls>(
-              block, block_end, start, partner, x, y, z, r, n, period, b.slot_row.data(),
-              {b.i.data(), b.j.data(), b.slot.data(), b.dx.data(), b.dy.data(), b.dz.data()});
+          const TouchingPairs out{b.i.data(),  b.j.data(),  b.slot.data(),
+                                  b.dx.data(), b.dy.data(), b.dz.data()};
+          b.size = prefetch ? touching_pairs_wide<!EndWalls, true>(block, block_end, start, partner,
+                                                                  x, y, z, r, n, period,
+                                                                  b.slot_row.data(), out, ahead)
+                            : touching_pairs_wide<!EndWalls, false>(block, block_end, start,
+                                                                   partner, x, y, z, r, n, period,
+                                                                   b.slot_row.data(), out, ahead);
           for (std::size_t c = 0; c < b.size; ++c) {
             const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
             b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
