@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <initializer_list>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -259,10 +258,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // ... asking ahead for the state of the partners where the data exceed the caches: their
   // positions and radii (the search), velocities, spins and inverse masses (the law in lanes).
   [[maybe_unused]] const bool prefetch = wide && e.prefetch_partners();
-  PartnerPrefetch ahead;
-  for (const double* a :
-       std::initializer_list<const double*>{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m})
-    ahead.arrays[ahead.count++] = a;
+  const PartnerPrefetch ahead{{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m}};
   // Each thread makes its own (see the parallel region), so that its arrays come from that
   // thread's allocator arena and share no cache line with another thread's.
   std::vector<std::unique_ptr<ContactBatch>> batches(static_cast<std::size_t>(team));
