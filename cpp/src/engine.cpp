@@ -13,7 +13,6 @@
 #include <string>
 #include <utility>
 
-
 #include "millscope/contact.hpp"
 #include "millscope/engine_kernels.hpp"
 #include "millscope/timestep.hpp"
