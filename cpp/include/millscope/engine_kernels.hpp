@@ -258,7 +258,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // ... asking ahead for the state of the partners where the data exceed the caches: their
   // positions and radii (the search), velocities, spins and inverse masses (the law in lanes).
   [[maybe_unused]] const bool prefetch = wide && e.prefetch_partners();
-  const PartnerPrefetch ahead{{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m}};
+  [[maybe_unused]] const PartnerPrefetch ahead{{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m}};
   // Each thread makes its own (see the parallel region), so that its arrays come from that
   // thread's allocator arena and share no cache line with another thread's.
   std::vector<std::unique_ptr<ContactBatch>> batches(static_cast<std::size_t>(team));
@@ -399,12 +399,12 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           b.reserve_listed(s1 - s0);
           const TouchingPairs out{b.i.data(),  b.j.data(),  b.slot.data(),
                                   b.dx.data(), b.dy.data(), b.dz.data()};
-          b.size = prefetch ? touching_pairs_wide<!EndWalls, true>(block, block_end, start, partner,
-                                                                  x, y, z, r, n, period,
-                                                                  b.slot_row.data(), out, ahead)
-                            : touching_pairs_wide<!EndWalls, false>(block, block_end, start,
-                                                                   partner, x, y, z, r, n, period,
-                                                                   b.slot_row.data(), out, ahead);
+          auto search = [&](auto with_prefetch) {
+            return touching_pairs_wide<!EndWalls, decltype(with_prefetch)::value>(
+                block, block_end, start, partner, x, y, z, r, n, period, b.slot_row.data(), out,
+                ahead);
+          };
+          b.size = prefetch ? search(std::true_type{}) : search(std::false_type{});
           for (std::size_t c = 0; c < b.size; ++c) {
             const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
             b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];

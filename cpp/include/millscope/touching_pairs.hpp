@@ -101,9 +101,10 @@ __attribute__((target("avx512f,avx512vl"))) inline std::size_t touching_pairs_wi
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i sixteen = _mm256_set1_epi32(16);
   std::size_t size = 0;
+  // All listed pairs, read once: the stores to `out` below may alias `start` for the compiler.
+  [[maybe_unused]] const std::uint32_t listed_all = start[n];
   for (std::uint32_t s = 0; s < listed; s += 8) {
     if constexpr (Prefetch) {
-      const std::uint32_t listed_all = start[n];
       const std::uint32_t list_at = s0 + s + PartnerPrefetch::list_ahead;
       __builtin_prefetch(partner + (list_at < listed_all ? list_at : listed_all), 0, 3);
       const std::uint32_t q0 = s0 + s + PartnerPrefetch::pair_ahead;
