@@ -391,7 +391,7 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
                                         for k in ("wide", "prefetch", "portable", "ledger"))
     assert wide.wide_pair_search == runs_wide_pair_search()
     assert not portable.wide_pair_search and not ledger.wide_pair_search
-    # 1200 spheres hold well under a megabyte: no prefetching unless asked (and only the wide
+    # 1201 spheres hold well under a megabyte: no prefetching unless asked (and only the wide
     # search prefetches)
     assert wide.bytes_per_particle * wide.size < 2**20 and not wide.prefetch_partners
     assert prefetch.prefetch_partners == runs_wide_pair_search()
