@@ -25,6 +25,11 @@
 # timed. LIGGGHTS then runs 2000 untimed warm-up steps before its timed STEPS; millscope times
 # from the cached state directly. Repeat runs scatter by 10-20 % on a shared machine: take
 # several pairs (REPEAT) and compare their median ratio.
+# Before each millscope run with NPROCS > 1 it prints core_handoff_ns (benchmarks/core_handoff.cpp,
+# built here with g++ when there is one): the time a cache line takes from one core to the
+# other. On a VM it changes with where the host puts the vCPUs (about 30 ns when they share a
+# last-level cache, 160 ns when not, on this project's machine), and millscope's threads, which
+# meet twice a step, slow down with it; LIGGGHTS' processes much less.
 # Last lines: both particle_steps_per_s and their ratio (with REPEAT > 1: the medians over the
 # pairs, and the median of the pairs' ratios).
 set -euo pipefail
@@ -70,6 +75,18 @@ fi
 
 cd "$ROOT"
 WARMUP=2000
+
+# The core-to-core hand-off probe (a diagnostic: skipped without a C++ compiler).
+HANDOFF=()
+if [ "$NP" -gt 1 ] && command -v g++ >/dev/null 2>&1; then
+  PROBE_DIR=$(mktemp -d)
+  trap 'rm -rf "$PROBE_DIR"' EXIT
+  if g++ -O2 -pthread "$ROOT/benchmarks/core_handoff.cpp" -o "$PROBE_DIR/core_handoff"; then
+    HANDOFF=("$PROBE_DIR/core_handoff")
+  else
+    echo "$0: warning: benchmarks/core_handoff.cpp did not build; no core_handoff_ns" >&2
+  fi
+fi
 
 if [ "$SCENE" = balls ]; then
   # The yardstick's time step, read from its input so that both codes run the same dt.
@@ -156,6 +173,11 @@ for ((k = 1; k <= REPEAT; k++)); do
   lig=$(echo "$lig_out" | sed -n 's/^particle_steps_per_s=//p' | tail -n 1)
 
   echo "== millscope: $STEPS steps on $NP thread(s)"
+  handoff=""
+  if [ ${#HANDOFF[@]} -gt 0 ]; then
+    handoff=$("${HANDOFF[@]}" | sed -n 's/^core_handoff_ns=//p')
+    echo "core_handoff_ns=$handoff"
+  fi
   ms_out=$("$PY" -m millscope bench --scale paper --scenes "$SCENE" --threads "$NP" \
     --steps "$STEPS" "${MS_DT[@]}" --spin-up "$SPIN_UP")
   echo "$ms_out"
@@ -167,7 +189,9 @@ for ((k = 1; k <= REPEAT; k++)); do
   fi
   ligs+=("$lig"); mss+=("$ms")
   ratios+=("$(awk -v m="$ms" -v l="$lig" 'BEGIN { printf "%.3f", m / l }')")
-  if [ "$REPEAT" -gt 1 ]; then echo "pair $k: ratio ${ratios[-1]}"; fi
+  if [ "$REPEAT" -gt 1 ]; then
+    echo "pair $k: ratio ${ratios[-1]}${handoff:+ (core hand-off $handoff ns)}"
+  fi
 done
 
 echo "== same scene ($SCENE), dt = $DT s, $STEPS steps, $NP process(es)/thread(s)"
