@@ -29,7 +29,7 @@
 # built here with g++ when there is one): the time a cache line takes from one core to the
 # other. On a VM it changes with where the host puts the vCPUs (about 30 ns when they share a
 # last-level cache, 160 ns when not, on this project's machine), and millscope's threads, which
-# meet twice a step, slow down with it; LIGGGHTS' processes much less.
+# meet twice a step, slow down with it.
 # Last lines: both particle_steps_per_s and their ratio (with REPEAT > 1: the medians over the
 # pairs, and the median of the pairs' ratios).
 set -euo pipefail

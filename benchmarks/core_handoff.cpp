@@ -3,9 +3,9 @@
 //
 // On a VM the host decides which physical cores carry the vCPUs. When the two share a
 // last-level cache a hand-off takes some 30 ns; when they do not it takes several times
-// that, and every place where the engine's threads meet (the barriers, the particles one
-// thread writes and the other reads) slows down with it, while work that stays on one core
-// does not. compare_liggghts.sh prints this figure next to each pair of runs.
+// that, and millscope's 2-thread runs slow down with it (README, "Threads on a busy
+// machine"), while work that stays on one core does not. compare_liggghts.sh prints this
+// figure before each of its millscope runs.
 //
 // build: g++ -O2 -pthread benchmarks/core_handoff.cpp -o core_handoff
 // usage: core_handoff [HANDOFFS] [ROUNDS]    (defaults 1000000 and 5)
@@ -15,7 +15,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <string>
 #include <thread>
 #include <vector>
 
