@@ -505,3 +505,37 @@ def test_engine_refuses_bad_settings(field: str, kwargs: dict, pattern: str) -> 
                          np.array(radius, float), np.zeros(1, np.int32), 1e-6)
         else:
             make_engine(radius, **args)
+
+
+# -- the materials a scene lists but does not use ------------------------------------------------
+
+CERAMIC = (3900.0, 1.4e8, 0.25)  # density, shear modulus, Poisson ratio: far softer than steel
+
+
+@pytest.mark.parametrize("order", ["steel first", "steel second"])
+def test_an_unused_material_does_not_set_the_contact_law(order: str) -> None:
+    """A steel ball dropped on the steel end wall of a drum whose table also lists ceramic (not
+    used, e = 1, no friction): the ball must rebound with steel-steel e = 0.3 and touch for the
+    steel-steel Hertz time, whichever index steel has."""
+    r, v, e_steel = 0.0125, 1.0, 0.3
+    materials = [STEEL, CERAMIC] if order == "steel first" else [CERAMIC, STEEL]
+    steel = materials.index(STEEL)
+    restitution = np.full((2, 2), 0.6)
+    friction = np.full((2, 2), 0.4)
+    restitution[1 - steel, 1 - steel], friction[1 - steel, 1 - steel] = 1.0, 0.0
+    restitution[steel, steel], friction[steel, steel] = e_steel, 0.15
+    dt = 0.02 * rayleigh_time(2 * r, *STEEL)
+    geometry = _core.DrumGeometry(0.44, 0.315, True, 0, 0.0, 0.0)
+    eng = _core.Engine([_core.Material(*m) for m in materials], restitution, friction, steel,
+                       geometry, np.array([r]), np.array([steel], np.int32), dt, gravity=0.0,
+                       threads=1)
+    assert "one material" in eng.variant
+    eng.positions = np.array([[0.0, 0.0, r + 1e-4]])
+    eng.velocities = np.array([[0.0, 0.0, -v]])
+    duration, after = contact_duration_and_exit(eng, 200000)
+    assert after[0, 2] / v == pytest.approx(e_steel, rel=0.02)
+    # Steel's stiffness, not ceramic's: the damped contact lasts somewhat longer than the
+    # elastic Hertz time (by about a fifth at e = 0.3); with ceramic's stiffness it would last
+    # several times longer.
+    steel_time = hertz_contact_time(STEEL, None, 2 * r, None, v)
+    assert steel_time < duration < 1.3 * steel_time

@@ -204,7 +204,9 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   const drum::Geometry& geom = e.config_.geometry;
   const double period = geom.length;  // periodic ends: the drum length is the period
   const std::size_t drum_mat = static_cast<std::size_t>(e.config_.drum_material);
-  const materials::PairConstants pc_one = e.pairs_(0, 0);
+  // One material in use: the drum's (used_materials counts the drum), whatever its index in
+  // the table; the table may list materials the scene does not use.
+  const materials::PairConstants pc_one = e.pairs_(drum_mat, drum_mat);
   const materials::PairTable& table = e.pairs_;
   // A rebuild is due once a particle may have moved skin/2 since the last build. The reference
   // positions are floats: each coordinate is off by at most half an ulp of the drum's largest
