@@ -148,17 +148,21 @@ void register_engine(py::module_& m) {
       .def("advance", &en::Engine::advance, arg("steps"), py::call_guard<py::gil_scoped_release>())
       .def(
           "advance_sampled",
-          [](en::Engine& e, double sample_dt, bool mean, long count) {
+          [](en::Engine& e, double sample_dt, bool mean, long count, long max_steps,
+             bool resume) {
             std::vector<double> rows;
             {
               py::gil_scoped_release release;
-              rows = e.advance_sampled(sample_dt, mean, count);
+              rows = e.advance_sampled(sample_dt, mean, count, max_steps, resume);
             }
             const auto n = static_cast<py::ssize_t>(rows.size() / 5);
             return to_numpy(std::move(rows)).reshape({n, static_cast<py::ssize_t>(5)});
           },
           arg("sample_dt"), arg("mean"), arg("count"),
-          "Steps until `count` torque samples are taken; rows (t, total, shell, lifters, ends).")
+          arg("max_steps") = std::numeric_limits<long>::max(), arg("resume") = false,
+          "Steps until `count` torque samples are taken or `max_steps` steps were run; with "
+          "`resume`, goes on with the sample under way of the previous call. Rows (t, total, "
+          "shell, lifters, ends).")
       .def("torque", [](const en::Engine& e) { return torque_dict(e.torque()); })
       .def("ledger",
            [](const en::Engine& e) {

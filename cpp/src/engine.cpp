@@ -282,6 +282,7 @@ void Engine::start_rotation(double omega) {
   omega_ = omega;
   rotation_start_ = step_;
   last_sample_offset_ = -1;
+  sampling_ = SamplingState{};
 }
 
 namespace {
@@ -370,73 +371,91 @@ namespace {
 /// Takes torque samples at the steps nearest k sample_dt after the start of rotation.
 class Sampler final : public StepObserver {
  public:
-  Sampler(double sample_dt, double dt, bool mean, long first, long count, long rotation_start)
-      : ratio_(sample_dt / dt), sample_dt_(sample_dt), mean_(mean), k_(first), left_(count),
-        rotation_start_(rotation_start) {}
-  // The mean of sample k covers the steps ending in (t_(k-1), t_k]; instantaneous samples take
-  // the torque of the step nearest t_k.
+  Sampler(double dt, long rotation_start, const SamplingState& state)
+      : ratio_(state.sample_dt / dt), rotation_start_(rotation_start), state_(state) {}
 
   long target(long k) const { return std::llround(static_cast<double>(k) * ratio_); }
-  long last_offset() const { return target(k_ + left_ - 1); }
-
-  void record(const Torque& t) {
-    out.insert(out.end(), {static_cast<double>(k_) * sample_dt_, t.total, t.shell, t.lifters, t.ends});
-    ++k_;
-    --left_;
-  }
+  long last_offset() const { return target(state_.next + state_.left - 1); }
+  const SamplingState& state() const { return state_; }
 
   void after_step(long step, const Torque& t) override {
-    if (left_ <= 0) return;
+    auto& s = state_;
+    s.step = step;
+    if (s.left <= 0) return;
     const long offset = step - rotation_start_;
-    if (mean_) {
-      sum_.total += t.total;
-      sum_.shell += t.shell;
-      sum_.lifters += t.lifters;
-      sum_.ends += t.ends;
-      ++terms_;
+    // The mean of sample k covers exactly the steps ending in (t_(k-1), t_k]; a call that
+    // starts before that interval runs its first steps without counting them.
+    if (s.mean && offset > target(s.next - 1)) {
+      s.sum.total += t.total;
+      s.sum.shell += t.shell;
+      s.sum.lifters += t.lifters;
+      s.sum.ends += t.ends;
+      ++s.terms;
     }
-    if (offset == target(k_)) {
-      if (mean_) {
-        const double w = 1.0 / static_cast<double>(terms_);
-        record(Torque{sum_.total * w, sum_.shell * w, sum_.lifters * w, sum_.ends * w});
-        sum_ = Torque{};
-        terms_ = 0;
-      } else {
-        record(t);
-      }
-      last_sampled = offset;
+    if (offset != target(s.next)) return;
+    if (s.mean) {
+      const double w = 1.0 / static_cast<double>(s.terms);
+      record(Torque{s.sum.total * w, s.sum.shell * w, s.sum.lifters * w, s.sum.ends * w});
+      s.sum = Torque{};
+      s.terms = 0;
+    } else {
+      record(t);  // the step nearest t_k
     }
+    last_sampled = offset;
   }
 
   std::vector<double> out;
   long last_sampled = -1;
 
  private:
-  double ratio_, sample_dt_;
-  bool mean_;
-  long k_, left_, rotation_start_;
-  Torque sum_;
-  long terms_ = 0;
+  void record(const Torque& t) {
+    out.insert(out.end(), {static_cast<double>(state_.next) * state_.sample_dt, t.total, t.shell,
+                           t.lifters, t.ends});
+    ++state_.next;
+    --state_.left;
+  }
+
+  double ratio_;
+  long rotation_start_;
+  SamplingState state_;
 };
 
 }  // namespace
 
-std::vector<double> Engine::advance_sampled(double sample_dt, bool mean, long count) {
+std::vector<double> Engine::advance_sampled(double sample_dt, bool mean, long count,
+                                            long max_steps, bool resume) {
   if (rotation_start_ < 0)
     throw std::logic_error("the drum has not started rotating; call start_rotation first");
   if (!(sample_dt >= dt_) || !std::isfinite(sample_dt))
     invalid("sample_dt", sample_dt, ">= the time step dt = " + std::to_string(dt_) + " s");
   if (count < 1) invalid("count", static_cast<double>(count), ">= 1");
+  if (max_steps < 1) invalid("max_steps", static_cast<double>(max_steps), ">= 1");
   const long offset = step_ - rotation_start_;
-  // Sample k is stamped t_k = k sample_dt and covers (t_(k-1), t_k]: the first sample of this
-  // call is the first whose interval starts now or later, so a run of n samples from a sample
-  // time advances exactly n sample_dt.
-  Sampler probe(sample_dt, dt_, mean, 0, 1, rotation_start_);
-  long first = std::max(1L, static_cast<long>(std::floor(static_cast<double>(offset) * dt_ / sample_dt)) - 1);
-  while (probe.target(first - 1) < offset || probe.target(first) <= last_sample_offset_) ++first;
-  Sampler sampler(sample_dt, dt_, mean, first, count, rotation_start_);
-  const long steps = sampler.last_offset() - offset;
+  SamplingState state;
+  if (resume) {
+    if (sampling_.step != step_ || sampling_.sample_dt != sample_dt || sampling_.mean != mean)
+      throw std::logic_error("advance_sampled(resume=True) must follow a call with the same "
+                             "sample_dt and mode, with no step in between");
+    state = sampling_;
+  } else {
+    // The first sample is the first whose interval (t_(k-1), t_k] starts now or later, and
+    // after the last sample taken: a run of n samples from a sample time advances exactly
+    // n sample_dt.
+    state.sample_dt = sample_dt;
+    state.mean = mean;
+    state.step = step_;
+    const Sampler probe(dt_, rotation_start_, state);
+    long first = std::max(
+        1L, static_cast<long>(std::floor(static_cast<double>(offset) * dt_ / sample_dt)) - 1);
+    while (probe.target(first - 1) < offset || probe.target(first) <= last_sample_offset_) ++first;
+    state.next = first;
+  }
+  state.left = count;
+  Sampler sampler(dt_, rotation_start_, state);
+  const long steps = std::min(sampler.last_offset() - offset, max_steps);
   kernel_(*this, steps, &sampler);
+  sampling_ = sampler.state();
+  sampling_.step = step_;
   if (sampler.last_sampled >= 0) last_sample_offset_ = sampler.last_sampled;
   return std::move(sampler.out);
 }
@@ -608,6 +627,7 @@ void Engine::restore(const Snapshot& s) {
   step_ = s.step;
   rotation_start_ = s.rotation_start;
   last_sample_offset_ = s.last_sample_offset;
+  sampling_ = SamplingState{};
   theta_ = s.theta;
   omega_ = s.omega;
   forces_valid_ = s.forces_valid;

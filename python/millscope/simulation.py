@@ -21,9 +21,11 @@ Life of a simulation::
   if that takes longer than ``settle_max_s``, a :class:`SettleWarning` says so and it goes on.
 * **Rotation**: the drum starts impulsively at the scene's speed (as the LIGGGHTS yardstick
   does); record time 0 is the start of rotation.
-* **Sampling**: sample k belongs to t_k = k ``sample_dt``. ``"instant"`` takes the torque of the
-  step nearest t_k (as EDEM writes it; the paper's data); ``"mean"`` averages the steps of
-  (t_k, t_k + sample_dt] (anti-aliased). The record's meta says which.
+* **Sampling**: sample k is stamped t_k = k ``sample_dt`` (k >= 1). ``"instant"`` takes the
+  torque of the step nearest t_k (as EDEM writes it; the paper's data); ``"mean"`` averages
+  exactly the steps that end in (t_k - sample_dt, t_k] (anti-aliased). A run that starts
+  between sample times begins with the first sample whose interval starts then or later. The
+  record's meta says which mode was used.
 
 All quantities are SI. Long runs show a tqdm bar (``progress=False`` turns it off) and Ctrl-C
 stops a run between chunks, keeping what was recorded.
@@ -73,7 +75,15 @@ _WALL_GAP = 0.05  # clearance of a placed particle from the drum, in its diamete
 #: outside Hertz theory (tests/physics/test_guards.py).
 SPEED_BOUND_FACTOR = 10.0
 MAX_OVERLAP_FRACTION = 1.0
-_CHUNK_PARTICLE_STEPS = 2.0e7  # engine work per chunk between progress updates (~1 s)
+#: Engine work handed to C++ in one call, in particle-steps and in steps (a step has a cost of
+#: its own however few the particles): Ctrl-C and the progress bar act between calls, so a
+#: call must last well under a second on a slow machine.
+_CHUNK_PARTICLE_STEPS = 5.0e6
+_CHUNK_STEPS = 20_000
+#: The most steps one call of run() or settle() may take. Beyond it a run would last months
+#: on any machine (a step costs at least a microsecond), and step offsets would lose their
+#: exact representation as doubles long before the engine's 64-bit counter overflows.
+MAX_RUN_STEPS = 10**12
 
 
 class SettleWarning(RuntimeWarning):
@@ -285,13 +295,16 @@ class Simulation:
 
     def settle(self, *, progress: bool = True) -> SettleReport:
         """Lets the charge come to rest in the stopped drum (fills it first if empty)."""
-        if self._phase == "empty":
-            self.fill()
         if self._phase == "rotating":
             raise RuntimeError("settle() is for a stopped drum; the drum is already rotating")
         tolerance, t_min, t_max = self._settle
+        self._check_steps("settle_max_s", t_max)
+        if self._phase == "empty":
+            self.fill()
         e = self._engine
-        chunk = max(1, int(round(0.02 / self.dt)))
+        # The rest measure every 0.02 s of simulated time, or more often where that much time
+        # would make a call too long to interrupt.
+        chunk = min(max(1, int(round(0.02 / self.dt))), self._steps_per_call())
         elapsed, ratio = 0.0, math.inf
         with _progress(progress, t_max, "settling", "s") as bar:
             while True:
@@ -359,6 +372,7 @@ class Simulation:
         if sampling not in ("instant", "mean"):
             raise ValueError(f"sampling = {sampling!r} is not valid; it must be 'instant' or "
                              "'mean'")
+        self._check_steps("duration", duration + sample_dt)
         count = int(round(duration / sample_dt))
         if count < 2:
             raise ValueError(f"duration = {duration} s is not valid; it must hold at least 2 "
@@ -370,18 +384,19 @@ class Simulation:
             self._phase = "rotating"
 
         e = self._engine
-        steps_per_sample = sample_dt / self.dt
-        per_chunk = max(1, int(_CHUNK_PARTICLE_STEPS / (e.size * steps_per_sample)))
+        max_steps = self._steps_per_call()
         rows: list[NDArray[np.float64]] = []
         taken = 0
-        interrupted = False
         with _progress(progress, count * sample_dt, "simulating", "s") as bar, \
                 _interrupt_flag() as stop:
             while taken < count and not stop.is_set():
-                n = min(per_chunk, count - taken)
-                rows.append(np.asarray(e.advance_sampled(sample_dt, sampling == "mean", n)))
-                taken += n
-                bar.update(n * sample_dt)
+                before = self.time
+                # Calls of at most max_steps steps, each going on with the sample under way.
+                out = np.asarray(e.advance_sampled(sample_dt, sampling == "mean", count - taken,
+                                                   max_steps, bool(rows)))
+                rows.append(out)
+                taken += len(out)
+                bar.update(self.time - before)
             interrupted = taken < count
         if interrupted:
             warnings.warn(f"run interrupted: kept {taken} of {count} samples", RuntimeWarning,
@@ -390,6 +405,20 @@ class Simulation:
         self.last_parts = {"shell": data[:, 2], "lifters": data[:, 3], "ends": data[:, 4]}
         meta = self._meta(sample_dt, sampling, interrupted)
         return TorqueRecord(data[:, 0], data[:, 1], meta)
+
+    def _steps_per_call(self) -> int:
+        """The most steps one call into the engine may take (see _CHUNK_PARTICLE_STEPS)."""
+        return max(1, min(_CHUNK_STEPS, int(_CHUNK_PARTICLE_STEPS / self._engine.size)))
+
+    def _check_steps(self, name: str, seconds: float) -> None:
+        """Refuses, before any work, a span of simulated time that needs more than
+        MAX_RUN_STEPS steps at this dt."""
+        steps = seconds / self.dt
+        if steps > MAX_RUN_STEPS:
+            raise ValueError(
+                f"{name} = {seconds:g} s is not valid: at dt = {self.dt:.6g} s it needs "
+                f"{steps:.3g} steps; one call may take at most {MAX_RUN_STEPS:.0e} steps "
+                f"({MAX_RUN_STEPS * self.dt:.6g} s at this dt)")
 
     def _meta(self, sample_dt: float, sampling: str, interrupted: bool) -> dict[str, Any]:
         lifters = self._scene.drum.lifters

@@ -81,6 +81,17 @@ struct Torque {
   double ends = 0.0;
 };
 
+/// Torque sampling under way (Engine::advance_sampled): the interval and mode, the next
+/// sample's index k and how many samples are still to take, the step the last call stopped at,
+/// and for interval means the sums over the steps already run in sample k's interval.
+struct SamplingState {
+  double sample_dt = 0.0;
+  bool mean = false;
+  long next = 0, left = 0, step = -1;
+  Torque sum;
+  long terms = 0;
+};
+
 /// Running totals of work and losses since the engine was made, J. With the kinetic, potential
 /// and elastic energies they close the energy balance:
 ///   drive_work + spring_work = change of (kinetic + potential + elastic) + dissipated.
@@ -216,12 +227,18 @@ class Engine {
   /// Advances `steps` steps.
   void advance(long steps);
   /// Advances until `count` more torque samples were taken at interval `sample_dt` (s) from the
-  /// start of rotation. Sample k (k >= 1) is stamped t_k = k sample_dt and covers
-  /// (t_(k-1), t_k]: "instant" takes the torque of the step nearest t_k, "mean" the mean over
-  /// the steps ending in that interval. A call starting at a sample time advances exactly
-  /// count x sample_dt.
-  /// Returns count x 5 values: time (s since rotation start), total, shell, lifters, end walls.
-  std::vector<double> advance_sampled(double sample_dt, bool mean, long count);
+  /// start of rotation, or `max_steps` steps were run, whichever comes first. Sample k (k >= 1)
+  /// is stamped t_k = k sample_dt and covers (t_(k-1), t_k]: "instant" takes the torque of the
+  /// step nearest t_k, "mean" the mean over exactly the steps ending in that interval. A fresh
+  /// call takes as its first sample the first whose interval starts now or later (a call from
+  /// a sample time advances exactly count x sample_dt); with `resume` it goes on with the
+  /// sampling the previous call left, the sample under way included, so that one run may be
+  /// cut into calls of at most max_steps steps anywhere and give the same samples.
+  /// Returns (samples taken) x 5 values: time (s since rotation start), total, shell, lifters,
+  /// end walls.
+  std::vector<double> advance_sampled(double sample_dt, bool mean, long count,
+                                      long max_steps = std::numeric_limits<long>::max(),
+                                      bool resume = false);
 
   // ---- observables
   Torque torque() const { return torque_; }
@@ -304,6 +321,7 @@ class Engine {
   long step_ = 0;
   long rotation_start_ = -1;
   long last_sample_offset_ = -1;
+  SamplingState sampling_;  // what the last advance_sampled call left, for one that resumes
   double theta_ = 0.0;
   double omega_ = 0.0;
   bool forces_valid_ = false;
