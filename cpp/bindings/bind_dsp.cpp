@@ -21,7 +21,9 @@ void register_dsp(py::module_& m) {
   py::class_<d::Peak>(m, "Peak")
       .def_readonly("frequency_hz", &d::Peak::frequency_hz)
       .def_readonly("amplitude", &d::Peak::amplitude)
-      .def_readonly("bin", &d::Peak::bin);
+      .def_readonly("bin", &d::Peak::bin)
+      .def_readonly("noise_amplitude", &d::Peak::noise_amplitude)
+      .def_readonly("local_maximum", &d::Peak::local_maximum);
 
   py::class_<d::BandMask>(m, "BandMask")
       .def_property_readonly("keep",

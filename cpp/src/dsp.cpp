@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -107,15 +108,27 @@ std::vector<cplx> rfft_of_windowed(const double* x, std::size_t n, Window window
 }
 
 // |sum_n w(n) y(n) exp(-2 pi i f n / fs)|: the windowed DTFT magnitude at any frequency f.
+// The phasor advances by one complex product a sample and is set afresh from cos and sin at
+// the start of every run of kPhasorRun samples, which bounds its rounding drift to a few
+// hundred ulps whatever the block's length.
 double dtft_magnitude(const std::vector<double>& wy, double f, double fs) {
+  constexpr std::size_t kPhasorRun = 256;
   const double step = -2.0 * pi * f / fs;
-  double re = 0.0, im = 0.0;
-  for (std::size_t i = 0; i < wy.size(); ++i) {
-    const double phase = step * static_cast<double>(i);
-    re += wy[i] * std::cos(phase);
-    im += wy[i] * std::sin(phase);
+  const double turn_re = std::cos(step), turn_im = std::sin(step);
+  double sum_re = 0.0, sum_im = 0.0;
+  for (std::size_t start = 0; start < wy.size(); start += kPhasorRun) {
+    const double phase = step * static_cast<double>(start);
+    double re = std::cos(phase), im = std::sin(phase);
+    const std::size_t end = std::min(wy.size(), start + kPhasorRun);
+    for (std::size_t i = start; i < end; ++i) {
+      sum_re += wy[i] * re;
+      sum_im += wy[i] * im;
+      const double next_re = re * turn_re - im * turn_im;
+      im = re * turn_im + im * turn_re;
+      re = next_re;
+    }
   }
-  return std::hypot(re, im);
+  return std::hypot(sum_re, sum_im);
 }
 
 }  // namespace
@@ -213,17 +226,31 @@ Peak find_peak(const double* x, std::size_t n, double fs, Window window, double 
   const double mean = mean_of(x, n);
   const auto X = rfft_of_windowed(x, n, window, mean);
 
-  auto to_bin = [&](double f) {
-    return static_cast<std::size_t>(std::clamp(f / df, 0.0, static_cast<double>(last)));
+  // The bins inside [lo, hi], counted from the frequencies directly: a bin index computed as
+  // (k df) / df may round to k - 1 and widen the window by a bin.
+  const double lo = std::max(0.0, near_hz - search_hz), hi = std::min(nyquist, near_hz + search_hz);
+  const double slack = 1e-9;  // in bins: a bin on the window's edge counts as inside it
+  auto clamp_bin = [&](double k) {
+    return static_cast<std::size_t>(std::clamp(k, 0.0, static_cast<double>(last)));
   };
-  std::size_t k_lo = to_bin(std::ceil((near_hz - search_hz) / df - 1e-9) * df);
-  std::size_t k_hi = to_bin(std::floor((near_hz + search_hz) / df + 1e-9) * df);
-  if (k_lo > k_hi) k_lo = k_hi = to_bin(std::round(near_hz / df) * df);
-  std::size_t best = k_lo;
-  for (std::size_t k = k_lo; k <= k_hi; ++k)
-    if (std::norm(X[k]) > std::norm(X[best])) best = k;
+  std::size_t k_lo = clamp_bin(std::ceil(lo / df - slack));
+  std::size_t k_hi = clamp_bin(std::floor(hi / df + slack));
+  if (k_lo > k_hi) k_lo = k_hi = clamp_bin(std::round(near_hz / df));  // window within a bin
+  // The largest bin of the window that is a peak of the spectrum (no larger than either
+  // neighbour, inside the window or not); else the largest bin: the slope of a line outside.
+  auto power = [&](std::size_t k) { return std::norm(X[k]); };
+  auto is_peak = [&](std::size_t k) {
+    return (k == 0 || power(k) >= power(k - 1)) && (k == last || power(k) >= power(k + 1));
+  };
+  std::size_t best = k_lo, best_peak = k_hi + 1;
+  for (std::size_t k = k_lo; k <= k_hi; ++k) {
+    if (power(k) > power(best)) best = k;
+    if (is_peak(k) && (best_peak > k_hi || power(k) > power(best_peak))) best_peak = k;
+  }
+  if (best_peak <= k_hi) best = best_peak;
 
-  // Refine between the neighbouring bins by golden-section search on the windowed DTFT.
+  // Refine by golden-section search on the windowed DTFT between the neighbouring bins, within
+  // the asked window: a larger line just outside it cannot draw the result out of it.
   const auto w = window_samples(window, n);
   std::vector<double> wy(n);
   double sum_w = 0.0;
@@ -231,12 +258,18 @@ Peak find_peak(const double* x, std::size_t n, double fs, Window window, double 
     wy[i] = w[i] * (x[i] - mean);
     sum_w += w[i];
   }
-  double a = std::max(0.0, (static_cast<double>(best) - 1.0) * df);
-  double b = std::min(nyquist, (static_cast<double>(best) + 1.0) * df);
+  const double kb = static_cast<double>(best);
+  const double a0 = std::max((kb - 1.0) * df, lo);
+  const double b0 = std::min((kb + 1.0) * df, hi);
+  double a = a0, b = b0;
   const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;
   double c = b - inv_phi * (b - a), d = a + inv_phi * (b - a);
   double fc = dtft_magnitude(wy, c, fs), fd = dtft_magnitude(wy, d, fs);
-  while (b - a > 1e-9 * df) {
+  // Each iteration shrinks the bracket by 1/phi: 60 take two bins below 1e-12 of a bin, as
+  // far as a double resolves a frequency. The count bounds the loop where rounding stops the
+  // bracket from shrinking (very long blocks).
+  const double tolerance = std::max(1e-9 * df, 8.0 * std::numeric_limits<double>::epsilon() * b);
+  for (int iteration = 0; iteration < 100 && b - a > tolerance; ++iteration) {
     if (fc > fd) {
       b = d; d = c; fd = fc;
       c = b - inv_phi * (b - a);
@@ -248,8 +281,35 @@ Peak find_peak(const double* x, std::size_t n, double fs, Window window, double 
     }
   }
   const double f_peak = 0.5 * (a + b);
-  const double weight = (f_peak < 0.5 * df || f_peak > nyquist - 0.5 * df) ? 1.0 : 2.0;
-  return Peak{f_peak, weight * dtft_magnitude(wy, f_peak, fs) / sum_w, best};
+  const double peak = dtft_magnitude(wy, f_peak, fs);
+  auto gain = [&](double f) {  // single-sided amplitude per |DTFT|
+    return ((f < 0.5 * df || f > nyquist - 0.5 * df) ? 1.0 : 2.0) / sum_w;
+  };
+  // A local maximum of the spectrum, unless the search ended on an edge of the window that
+  // is not an edge of the spectrum and the spectrum still rises beyond it.
+  const double step = 1e-3 * df;
+  const bool low_edge = a0 == lo && lo > 0.0 && f_peak - a0 < 2.0 * tolerance &&
+                        dtft_magnitude(wy, a0 - step, fs) > peak;
+  const bool high_edge = b0 == hi && hi < nyquist && b0 - f_peak < 2.0 * tolerance &&
+                         dtft_magnitude(wy, b0 + step, fs) > peak;
+
+  // The noise around the line: the median amplitude of the bins within kNoiseBins of it,
+  // outside its main lobe (with a bin to spare) and outside the mean's.
+  const auto lobe = static_cast<std::size_t>(window_factors(window, n).mainlobe_half_bins) + 1;
+  std::vector<double> around;
+  const std::size_t from = best > kNoiseBins ? best - kNoiseBins : 0;
+  const std::size_t to = std::min(last, best + kNoiseBins);
+  for (std::size_t k = from; k <= to; ++k) {
+    const std::size_t gap = k > best ? k - best : best - k;
+    if (gap > lobe && k > lobe) around.push_back(std::abs(X[k]) * gain(static_cast<double>(k) * df));
+  }
+  double noise = 0.0;
+  if (!around.empty()) {
+    auto mid = around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2);
+    std::nth_element(around.begin(), mid, around.end());
+    noise = *mid;
+  }
+  return Peak{f_peak, gain(f_peak) * peak, best, noise, !(low_edge || high_edge)};
 }
 
 BandMask band_mask(std::size_t n, double fs, Window window, bool remove_mean,

@@ -92,8 +92,7 @@ class BlockAnalysis:
             f"(resolution {1 / self.record_length_s:.4g} Hz)",
             f"mean torque            {self.mean_torque_Nm:.6g} N m",
             f"LTH expected           {self.lth_expected_hz:.4f} Hz",
-            f"LTH found              {self.lth.frequency_hz:.4f} Hz, amplitude "
-            f"{self.lth.amplitude:.4g} N m",
+            f"LTH found              {self.lth.describe()}",
             f"drive-train lines      {lines} Hz",
             f"removed band width     +-{e.half_width_hz:.3g} Hz{widened}",
             f"spectral energy        {e.energy:.6g} (N m)^2 s "

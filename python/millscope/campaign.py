@@ -355,6 +355,11 @@ class CaseResult:
     lth_hz, lth_amplitude : float
         The lifter torque harmonic located near lifters x rotation frequency in the block, Hz
         and N m (nan without lifters).
+    lth_snr : float
+        Its amplitude over the median amplitude of the bins around it (nan without lifters).
+    lth_distinct : bool
+        Whether it stands out of the noise (:attr:`millscope.Peak.distinct`); a located "LTH"
+        that does not is a noise peak, and its frequency and amplitude say little.
     energy : float
         Spectral energy of the block with the mean and the LTH removed, (N m)^2 s, eq. (11).
     energy_relative_std : float
@@ -374,6 +379,8 @@ class CaseResult:
     mean_torque: float = math.nan
     lth_hz: float = math.nan
     lth_amplitude: float = math.nan
+    lth_snr: float = math.nan
+    lth_distinct: bool = False
     energy: float = math.nan
     energy_relative_std: float = math.nan
     analysis: AnalysisSettings | None = None
@@ -398,7 +405,8 @@ class CaseResult:
             a = analyze_block(blk, lifters=lifters.count, rotation_hz=case.scene.rotation_hz,
                               bandwidth=analysis.bandwidth, window=window)
             values = {"mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
-                      "lth_amplitude": a.lth.amplitude, "energy": a.energy.energy,
+                      "lth_amplitude": a.lth.amplitude, "lth_snr": a.lth.snr,
+                      "lth_distinct": a.lth.distinct, "energy": a.energy.energy,
                       "energy_relative_std": a.energy.relative_std}
         else:
             e = spectral_energy(blk, ["mean"], bandwidth=analysis.bandwidth, window=window)

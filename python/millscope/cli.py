@@ -103,7 +103,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     stem = Path(args.file).stem
     spec = spectrum(block, window=args.window)
-    fig = plots.plot_spectrum(spec, lth_hz=result.lth.frequency_hz, lines_hz=list(lines),
+    fig = plots.plot_spectrum(spec, lth_hz=result.lth.frequency_hz,
+                              lth_distinct=result.lth.distinct, lines_hz=list(lines),
                               title=f"{stem}: torque spectrum")
     written = [plots.save_figure(fig, out / f"{stem}_spectrum.png")]
     remove: list[RemoveItem] = ["mean", result.lth.frequency_hz, *result.lines_hz]

@@ -337,6 +337,7 @@ def main_job_section(results: Sequence[CaseResult], out: str | os.PathLike[str],
     save(plots.plot_torque(first.block, title=f"{name}: drive torque ({plan.scale} scale, DEM)"),
          f"torque_level{k}.png")
     save(plots.plot_spectrum(spectrum(first.block), lth_hz=first.result.lth_hz,
+                             lth_distinct=first.result.lth_distinct,
                              title=f"{name}: torque spectrum"), f"spectrum_level{k}.png")
     filtered = band_stop(first.block, ["mean", first.result.lth_hz], window="rectangular")
     save(plots.plot_filtered(first.block, filtered), f"filtered_level{k}.png")
@@ -481,6 +482,7 @@ def run_synthetic_demo(out: str | os.PathLike[str], *, progress: bool = True) ->
         if level == 1:
             record.to_csv(folder / "synthetic_level1.csv")
             fig = plots.plot_spectrum(spectra[-1], lth_hz=analyses[-1].lth.frequency_hz,
+                                      lth_distinct=analyses[-1].lth.distinct,
                                       title="Synthetic torque, level #1: spectrum")
             plots.save_figure(fig, folder / "synthetic_spectrum_level1.png")
             filtered = band_stop(block, ["mean", analyses[-1].lth.frequency_hz],

@@ -207,7 +207,7 @@ def plot_filtered(original: TorqueRecord, filtered: TorqueRecord, *, ax: Axes | 
 
 
 # -- spectra ---------------------------------------------------------------------------------
-def plot_spectrum(spec: Spectrum, *, lth_hz: float | None = None,
+def plot_spectrum(spec: Spectrum, *, lth_hz: float | None = None, lth_distinct: bool = True,
                   lines_hz: Sequence[LineSpec] = (), ax: Axes | None = None,
                   title: str | None = None, fmax_hz: float | None = None, log: bool = False,
                   color: str = "tab:blue", linewidth: float = 0.8, label: str | None = None
@@ -228,6 +228,10 @@ def plot_spectrum(spec: Spectrum, *, lth_hz: float | None = None,
     lth_hz : float, optional
         Frequency of the lifter torque harmonic, Hz (n_lifters x rotation frequency, or the
         located peak); marked with an arrow to the largest amplitude within +-2 bins.
+    lth_distinct : bool
+        Whether the located LTH stands out of the noise (:attr:`millscope.Peak.distinct`);
+        when False the arrow is grey and its text says "LTH? ... not above the noise", so that
+        a noise peak is not labelled as the harmonic.
     lines_hz : sequence, optional
         Drive-train lines to mark with dotted vertical lines: frequencies in Hz, ``(name, hz)``
         pairs, or objects with ``name`` and ``frequency_hz`` (drive-train ``InterferenceLine``).
@@ -276,9 +280,11 @@ def plot_spectrum(spec: Spectrum, *, lth_hz: float | None = None,
         else:
             ax.set_ylim(top=max(ax.get_ylim()[1], peak * 1.45))
             text_y = peak * 1.2
-        ax.annotate(f"LTH {lth_hz:.2f} Hz", xy=(lth_hz, peak), xytext=(lth_hz, text_y),
-                    ha="center", va="bottom", color=_LTH_COLOR, fontsize="small",
-                    arrowprops={"arrowstyle": "-|>", "color": _LTH_COLOR, "lw": 1.2,
+        text, mark = ((f"LTH {lth_hz:.2f} Hz", _LTH_COLOR) if lth_distinct else
+                      (f"LTH? {lth_hz:.2f} Hz\nnot above the noise", _LINE_COLOR))
+        ax.annotate(text, xy=(lth_hz, peak), xytext=(lth_hz, text_y),
+                    ha="center", va="bottom", color=mark, fontsize="small",
+                    arrowprops={"arrowstyle": "-|>", "color": mark, "lw": 1.2,
                                 "shrinkA": 0, "shrinkB": 1})
     for item in lines_hz:
         name, freq = _line(item)
@@ -368,7 +374,8 @@ def plot_waterfall(spectra: Sequence[Spectrum], labels: Sequence[str], *,
 
 
 def plot_spectra_grid(spectra: Sequence[Spectrum], labels: Sequence[str], *,
-                      lth_hz: Sequence[float | None] | None = None, fmax_hz: float | None = None,
+                      lth_hz: Sequence[float | None] | None = None,
+                      lth_distinct: Sequence[bool] | None = None, fmax_hz: float | None = None,
                       ncols: int = 2, same_scale: bool = True, title: str | None = None
                       ) -> Figure:
     """Several spectra in a grid of panels a), b), ... with the LTH marked (paper Fig. 10).
@@ -385,6 +392,9 @@ def plot_spectra_grid(spectra: Sequence[Spectrum], labels: Sequence[str], *,
         One label per spectrum.
     lth_hz : sequence of float or None, optional
         Per spectrum, the LTH to mark, Hz (None: no arrow in that panel).
+    lth_distinct : sequence of bool, optional
+        Per spectrum, whether its LTH stands out of the noise (see :func:`plot_spectrum`);
+        default all True.
     fmax_hz : float, optional
         Highest frequency shown, Hz.
     ncols : int
@@ -409,9 +419,11 @@ def plot_spectra_grid(spectra: Sequence[Spectrum], labels: Sequence[str], *,
     if n == 0:
         raise ValueError("spectra is empty; give at least one spectrum")
     marks = [None] * n if lth_hz is None else list(lth_hz)
-    if len(labels) != n or len(marks) != n:
-        raise ValueError(f"spectra has {n} entries, labels {len(labels)} and lth_hz "
-                         f"{len(marks)}; give one label and one LTH (or None) per spectrum")
+    distinct = [True] * n if lth_distinct is None else list(lth_distinct)
+    if len(labels) != n or len(marks) != n or len(distinct) != n:
+        raise ValueError(f"spectra has {n} entries, labels {len(labels)}, lth_hz "
+                         f"{len(marks)} and lth_distinct {len(distinct)}; give one label and "
+                         "one LTH (or None) per spectrum")
     if not isinstance(ncols, int) or isinstance(ncols, bool) or ncols < 1:
         raise ValueError(f"ncols = {ncols!r} is not valid; it must be an integer >= 1")
     cols = min(ncols, n)
@@ -419,9 +431,11 @@ def plot_spectra_grid(spectra: Sequence[Spectrum], labels: Sequence[str], *,
     fig = Figure(figsize=(4.6 * cols, 2.7 * rows + 0.4), layout="constrained")
     axes = fig.subplots(rows, cols, sharex=True, squeeze=False).ravel()
     letters = "abcdefghijklmnopqrstuvwxyz"
-    for i, (spec, label, mark) in enumerate(zip(spectra, labels, marks, strict=True)):
+    for i, (spec, label, mark, clear) in enumerate(zip(spectra, labels, marks, distinct,
+                                                         strict=True)):
         prefix = f"{letters[i]}) " if i < len(letters) else ""
-        plot_spectrum(spec, lth_hz=mark, ax=axes[i], fmax_hz=fmax_hz, title=f"{prefix}{label}")
+        plot_spectrum(spec, lth_hz=mark, lth_distinct=clear, ax=axes[i], fmax_hz=fmax_hz,
+                      title=f"{prefix}{label}")
         if i % cols:
             axes[i].set_ylabel("")
         if i < n - cols:

@@ -37,7 +37,7 @@ from .campaign import Campaign, CaseResult
 from .campaign_analysis import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
 from .fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from .presets import case_key
-from .spectral import spectrum
+from .spectral import PEAK_DISTINCT_RATIO, spectrum
 
 __all__ = ["calibration_file_name", "write_report"]
 
@@ -77,7 +77,8 @@ def _first_per_level(group: GroupAnalysis) -> list[CaseResult]:
     return list(seen.values())
 
 
-def _spectra(group: GroupAnalysis) -> tuple[list, list[str], list[float | None]]:
+def _spectra(group: GroupAnalysis
+             ) -> tuple[list, list[str], list[float | None], list[bool]]:
     cases = _first_per_level(group)
     spectra = []
     for r in cases:
@@ -86,7 +87,7 @@ def _spectra(group: GroupAnalysis) -> tuple[list, list[str], list[float | None]]
                                 window=group.settings.window))  # type: ignore[arg-type]
     labels = [r.scene.name.replace("#", "") for r in cases]
     marks = [r.lth_hz if math.isfinite(r.lth_hz) else None for r in cases]
-    return spectra, labels, marks
+    return spectra, labels, marks, [r.lth_distinct for r in cases]
 
 
 def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
@@ -100,8 +101,8 @@ def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
                         {g.name: (g.levels, g.torque_pu) for g in groups}))]
     for g in groups:
         def grid(g: GroupAnalysis = g) -> Figure:
-            spectra, labels, marks = _spectra(g)
-            return plots.plot_spectra_grid(spectra, labels, lth_hz=marks,
+            spectra, labels, marks, distinct = _spectra(g)
+            return plots.plot_spectra_grid(spectra, labels, lth_hz=marks, lth_distinct=distinct,
                                            title=f"{g.name} torque spectra, LTH marked")
         figs.append(_Figure(f"fig10_spectra_{_slug(g.name)}.png",
                             f"Fig. 10: {g.name} spectra",
@@ -114,7 +115,7 @@ def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
                              if g.lifters > 0})))
     for g in groups:
         def waterfall(g: GroupAnalysis = g) -> Figure:
-            spectra, labels, _ = _spectra(g)
+            spectra, labels, _, _ = _spectra(g)
             return plots.plot_waterfall(spectra, labels, title=f"{g.name} torque spectra")
         figs.append(_Figure(f"fig12_waterfall_{_slug(g.name)}.png",
                             f"Figs. 12-13: {g.name} waterfall",
@@ -148,18 +149,33 @@ def _group_table(g: GroupAnalysis) -> list[str]:
                     f"{g.energy_pu[k]:.4f}{interval} | "
                     f"{f'{100 * spread:.1f} %' if math.isfinite(spread) else '-'} | "
                     f"{g.interval_source[k]} |")
+    noise = [r for r in g.results if r.ok and g.lifters > 0 and not r.lth_distinct]
+    if noise:
+        rows += ["", f"The LTH does not stand out of the noise (amplitude below "
+                 f"{PEAK_DISTINCT_RATIO:g} x the median of the bins around it, or no line in the "
+                 f"search window) in {len(noise)} of {sum(r.ok for r in g.results)} cases: "
+                 f"{', '.join(f'{r.scene.name} seed {r.case.settings.seed}' for r in noise)}. "
+                 "Their LTH frequency and amplitude are those of a noise peak."]
     return rows
+
+
+def _lth_contrast(r: CaseResult) -> str:
+    """The LTH's amplitude over the noise around it, flagged when it does not stand out."""
+    if not math.isfinite(r.lth_snr):
+        return "-"
+    return f"{r.lth_snr:.3g}" + ("" if r.lth_distinct else " (noise)")
 
 
 def _case_table(results: list[CaseResult]) -> list[str]:
     rows = ["| case | seed | status | level | mean torque (N m) | LTH (Hz) | LTH (N m) | "
-            "energy ((N m)² s) | wall time (s) | hash |",
-            "|---|---|---|---|---|---|---|---|---|---|"]
+            "LTH / noise | energy ((N m)² s) | wall time (s) | hash |",
+            "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         level = case_key(r.scene).load_level
         rows.append(f"| {r.scene.name} | {r.case.settings.seed} | {r.status} | "
                     f"{'-' if level is None else f'{level:g}'} | {_number(r.mean_torque, 5)} | "
-                    f"{_number(r.lth_hz)} | {_number(r.lth_amplitude)} | {_number(r.energy)} | "
+                    f"{_number(r.lth_hz)} | {_number(r.lth_amplitude)} | "
+                    f"{_lth_contrast(r)} | {_number(r.energy)} | "
                     f"{_number(r.wall_time_s, 3)} | `{r.hash[:12]}` |")
     return rows
 

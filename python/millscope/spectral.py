@@ -11,6 +11,7 @@ Windows: ``"hann"`` (symmetric, eq. 10, the default), ``"hann_periodic"`` and ``
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -33,6 +34,7 @@ __all__ = [
     "spectral_energy",
     "band_stop",
     "LTH_CLEAR_BINS",
+    "PEAK_DISTINCT_RATIO",
 ]
 
 WindowName = Literal["hann", "hann_periodic", "rectangular"]
@@ -162,12 +164,59 @@ def lifter_harmonic_hz(n_lifters: int, rotation_hz: float) -> float:
     return float(n_lifters) * float(rotation_hz)
 
 
+#: A located line is told apart from the noise when its amplitude is at least this many times
+#: the median amplitude of the bins around it. For Gaussian noise a bin's amplitude is
+#: Rayleigh distributed, so it exceeds c times the median with probability 2**(-c**2): 0.2 %
+#: per bin at c = 3, about 1.4 % somewhere in a search of 7 bins.
+PEAK_DISTINCT_RATIO = 3.0
+
+
 @dataclass(frozen=True)
 class Peak:
-    """A spectral line: ``frequency_hz`` (Hz, refined between bins) and ``amplitude`` (N m)."""
+    """A spectral line located near an expected frequency.
+
+    Attributes
+    ----------
+    frequency_hz : float
+        Frequency, Hz, refined between bins; always inside the searched window.
+    amplitude : float
+        Amplitude of the sinusoid at ``frequency_hz``, window gain corrected (N m for torque).
+    noise_amplitude : float
+        Median amplitude of the bins around the line (25 bins each side, outside its main lobe
+        and the mean's), in the same unit; nan when unknown.
+    local_maximum : bool
+        False when no bin of the window is a peak of the spectrum and the largest value lies on
+        the window's edge: the slope of a larger line outside the window, not a line inside it.
+    """
 
     frequency_hz: float
     amplitude: float
+    noise_amplitude: float = float("nan")
+    local_maximum: bool = True
+
+    @property
+    def snr(self) -> float:
+        """``amplitude / noise_amplitude`` (inf over a noise-free spectrum, nan when unknown)."""
+        if self.noise_amplitude > 0:
+            return self.amplitude / self.noise_amplitude
+        return float("inf") if self.noise_amplitude == 0 and self.amplitude > 0 else float("nan")
+
+    @property
+    def distinct(self) -> bool:
+        """Whether the line stands out of the noise around it: a local maximum of the spectrum
+        with ``snr >= PEAK_DISTINCT_RATIO``."""
+        return self.local_maximum and self.snr >= PEAK_DISTINCT_RATIO
+
+    def describe(self) -> str:
+        """One line: frequency, amplitude and how far it stands out of the noise."""
+        text = f"{self.frequency_hz:.4f} Hz, amplitude {self.amplitude:.4g}"
+        if math.isfinite(self.snr):
+            text += f", {self.snr:.3g} x the noise around it"
+        if not self.local_maximum:
+            text += " (not a line: the slope of a larger one outside the search window)"
+        elif not self.distinct:
+            text += f" (not distinguishable from the noise: below {PEAK_DISTINCT_RATIO:g} x)"
+        return text
 
 
 def find_peak(data: Samples, near_hz: float, *, search_hz: float | None = None,
@@ -175,22 +224,26 @@ def find_peak(data: Samples, near_hz: float, *, search_hz: float | None = None,
     """Locate the largest line within ``near_hz +- search_hz`` and refine it between bins.
 
     Real mills drift in speed, so the LTH and drive lines are searched near where they are
-    expected. The refinement maximises the windowed DTFT of the block (mean removed) between the
-    neighbouring bins, which is exact for a lone sinusoid whatever the window.
+    expected. Of the bins in the window, the largest that is a peak of the spectrum is taken
+    (the largest bin when none is). The refinement maximises the windowed DTFT of the block
+    (mean removed) between its neighbouring bins, never beyond the window, which is exact for a
+    lone sinusoid whatever the window. The result says how far the line stands out of the noise
+    (:attr:`Peak.snr`, :attr:`Peak.distinct`).
 
     Parameters
     ----------
     near_hz : float
-        Expected frequency, Hz.
+        Expected frequency, Hz, in [0, Nyquist].
     search_hz : float, optional
-        Half-width of the search range, Hz; default 3 bins (3/TR).
+        Half-width of the search window, Hz (>= 0); default 3 bins (3/TR).
     """
     _check_window(window)
     x, fs = _samples(data, sample_rate_hz)
     if search_hz is None:
         search_hz = 3.0 * fs / x.size
     p = _core.find_peak(x, fs, window, float(near_hz), float(search_hz))
-    return Peak(frequency_hz=p.frequency_hz, amplitude=p.amplitude)
+    return Peak(frequency_hz=p.frequency_hz, amplitude=p.amplitude,
+                noise_amplitude=p.noise_amplitude, local_maximum=p.local_maximum)
 
 
 @dataclass(frozen=True)

@@ -54,16 +54,24 @@ std::vector<cplx> windowed_rfft(const double* x, std::size_t n, Window window);
 /// The three single-sided scalings of the windowed block, from one FFT.
 Spectra spectra(const double* x, std::size_t n, double fs, Window window);
 
+/// How many bins on each side of a located line give the noise level it is compared with.
+inline constexpr std::size_t kNoiseBins = 25;
+
 /// A spectral line located near an expected frequency.
 struct Peak {
-  double frequency_hz;  // refined between bins
-  double amplitude;     // amplitude of the sinusoid at frequency_hz, window gain corrected
-  std::size_t bin;      // the largest bin in the search range
+  double frequency_hz;     // refined between bins, always inside the search window
+  double amplitude;        // amplitude of the sinusoid at frequency_hz, window gain corrected
+  std::size_t bin;         // the largest bin in the search window
+  double noise_amplitude;  // median amplitude of the bins within kNoiseBins of `bin`, outside
+                           // its main lobe and the mean's (0 when there are none)
+  bool local_maximum;      // false when the largest value in the window lies on its edge and
+                           // the spectrum rises beyond it: a line outside, not one inside
 };
 
 /// Locates the largest line within [near_hz - search_hz, near_hz + search_hz] and refines it
 /// between bins by maximising the magnitude of the windowed discrete-time Fourier transform of the
-/// block (mean removed) over the neighbouring bins. Exact for a lone sinusoid whatever the window.
+/// block (mean removed) over the neighbouring bins, never beyond the window. Exact for a lone
+/// sinusoid whatever the window.
 Peak find_peak(const double* x, std::size_t n, double fs, Window window, double near_hz,
                double search_hz);
 
