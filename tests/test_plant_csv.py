@@ -112,10 +112,6 @@ def write_shape(tmp_path: Path, name: str) -> tuple[Path, dict[str, Any]]:
     return path, options
 
 
-def test_there_are_fifteen_shapes() -> None:
-    assert len(SHAPES) == 15
-
-
 @pytest.mark.parametrize("name", list(SHAPES))
 def test_each_export_shape_loads_to_the_known_si_samples(tmp_path, name: str) -> None:
     path, options = write_shape(tmp_path, name)

@@ -82,9 +82,9 @@ _ANY_NUMBER = re.compile(rf"{_number_pattern('.').pattern}|{_number_pattern(',')
 _COMMA_DECIMAL = re.compile(r"[+-]?[0-9]*,[0-9]+(?:[eE][+-]?[0-9]+)?")
 
 
-def _short(text: str, limit: int = 40) -> str:
-    """``text`` for a message: its first ``limit`` characters and how many more."""
-    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
+def _quoted(text: str, limit: int = 40) -> str:
+    """``repr(text)`` for a message: of its first ``limit`` characters, then how many more."""
+    return repr(text) if len(text) <= limit else f"{text[:limit]!r}... ({len(text)} characters)"
 
 
 def canonical_unit(text: str, kind: str) -> str | None:
@@ -207,30 +207,41 @@ def parse_meta(text: str, where: str) -> dict[str, Any]:
         raise RecordError(f"{where}: meta is nested too deeply to read") from None
     if not isinstance(meta, Mapping):
         raise RecordError(f"{where}: meta must be a JSON object {{...}}; got "
-                          f"{type(meta).__name__} {_short(json.dumps(meta))}")
+                          f"{type(meta).__name__} {_quoted(json.dumps(meta))}")
     return dict(meta)
 
 
 def _split(line: str, sep: str, where: str) -> list[str]:
     """The fields of one line (quotes as pandas reads them)."""
+    if '"' not in line:
+        return line.split(sep)
     try:
         return next(csv.reader([line], delimiter=sep))
-    except csv.Error as exc:
+    except csv.Error as exc:  # a quoted field over csv's limit of 131,072 characters
         raise RecordError(f"{where}: {exc}") from None
 
 
-def _sniff_sep(lines: list[str], where: str) -> str:
+def _sniff_sep(lines: list[str]) -> str:
     """The separator that splits most of ``lines`` into two or more fields."""
-    counts = [sum(len(_split(line, s, where)) >= 2 for line in lines) for s in SEPARATORS]
+    counts = [sum(s in line for line in lines) for s in SEPARATORS]
     best = max(range(len(SEPARATORS)), key=lambda i: (counts[i], -i))
     return SEPARATORS[best] if counts[best] else ","
 
 
+def _python_number(cell: str) -> bool:
+    """What Python's float() reads (also '1_0' and other scripts' digits, refused later)."""
+    try:
+        float(cell.replace(",", "."))
+    except ValueError:
+        return False
+    return True
+
+
 def _is_data(fields: list[str]) -> bool:
-    """A row of numbers (and ISO date-times), two fields or more."""
+    """A row of two or more fields, numbers (one at least in ASCII) and ISO date-times."""
     cells = [f.strip() for f in fields if f.strip()]
     return (len(fields) >= 2 and any(_ANY_NUMBER.fullmatch(c) for c in cells)
-            and all(_ANY_NUMBER.fullmatch(c) or _ISO.fullmatch(c) for c in cells))
+            and all(_ISO.fullmatch(c) or _python_number(c) for c in cells))
 
 
 def _is_units_row(fields: list[str]) -> bool:
@@ -324,7 +335,7 @@ def _numbers(cells: Any, decimal: str, lines: NDArray[np.int64], column: _Column
     if not good.all():
         i = int(np.flatnonzero(~good)[0])
         value = str(stripped.iloc[i])
-        what = " is missing or empty" if not value else f": {_short(value)!r} is not a number"
+        what = " is missing or empty" if not value else f": {_quoted(value)} is not a number"
         hint = "" if not value or decimal == "," or not _COMMA_DECIMAL.fullmatch(value) else (
             " (a decimal comma? give decimal=',')")
         raise RecordError(f"{where} line {lines[i]}: column {column.header!r}{what}{hint}")
@@ -343,7 +354,7 @@ def _seconds(cells: Any, lines: NDArray[np.int64], column: _Column,
     if bad.size:
         i = int(bad[0])
         raise RecordError(f"{where} line {lines[i]}: column {column.header!r}: "
-                          f"{_short(str(cells.iloc[i]))!r} is not an ISO 8601 date-time")
+                          f"{_quoted(str(cells.iloc[i]))} is not an ISO 8601 date-time")
     seconds = (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=np.float64)
     return seconds, str(cells.iloc[0]).strip()
 
@@ -375,7 +386,7 @@ def read_torque_csv(path: Path, options: CsvOptions) -> tuple[
         if not stripped.startswith("#"):
             kept.append(i)
     head = kept[:MAX_PREAMBLE_LINES]
-    sep = options.sep or _sniff_sep([lines[i] for i in head], where)
+    sep = options.sep or _sniff_sep([lines[i] for i in head])
     rows = [_split(lines[i], sep, f"{where} line {i + 1}") for i in head]
     start = next((k for k, fields in enumerate(rows) if _is_data(fields)), None)
     if start is None:
@@ -425,8 +436,8 @@ def read_torque_csv(path: Path, options: CsvOptions) -> tuple[
     try:
         frame = pd.read_csv(io.StringIO("\n".join(lines[i] for i in data)), sep=sep,
                             header=None, names=range(columns), dtype=str, index_col=False,
-                            na_filter=False, engine="c", quotechar='"',
-                            usecols=[time_index, torque_index, *extra])
+                            na_filter=False, engine="c", quotechar='"')
+        # (not usecols: with it, pandas drops the fields of a row longer than the header)
     except pd.errors.ParserError as exc:
         message = str(exc).strip().splitlines()[-1]
         match = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", message)

@@ -83,7 +83,8 @@ def _npz_member(archive: zipfile.ZipFile, key: str, where: str) -> NDArray[Any]:
         info = archive.getinfo(f"{key}.npy")
     except KeyError:
         raise RecordError(f"{where}: not a millscope record: it holds no {key!r} array (found "
-                          f"{archive.namelist()[:5]})") from None
+                          f"{archive.namelist()[:5]}; a record holds time_s, torque_Nm and "
+                          "meta_json, a JSON object as text)") from None
     with archive.open(info) as fp:
         version = np.lib.format.read_magic(fp)
         if version == (1, 0):
@@ -120,10 +121,13 @@ def _read_npz(source: Path) -> tuple[NDArray[Any], NDArray[Any], dict[str, Any]]
     where = str(source)
     try:
         with zipfile.ZipFile(source) as archive:
+            for info in archive.infolist():  # a name differing from its local header raises
+                archive.open(info).close()
             time = _npz_member(archive, TIME_COLUMN, where)
             torque = _npz_member(archive, TORQUE_COLUMN, where)
-            meta = ({} if "meta_json.npy" not in archive.namelist() else
-                    parse_meta(str(_npz_member(archive, "meta_json", where)[()]), where))
+            # meta_json is required (save always writes it): a damaged central directory can
+            # hide a member, and a record without its meta would be read as another record
+            meta = parse_meta(str(_npz_member(archive, "meta_json", where)[()]), where)
     except RecordError:
         raise
     except _NPZ_ERRORS as exc:
