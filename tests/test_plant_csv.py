@@ -186,7 +186,7 @@ def test_jitter_beyond_the_tolerance_is_refused_with_the_measured_jitter(tmp_pat
          r"decimal=','\)"),
         (b"Zeit [s];Drehmoment [Nm]\n0;1\n\xff\n", {"encoding": "utf-8"},
          r"not utf-8 text: byte 29 is 0xff; give the file's encoding"),
-        (b"time_s,torque_Nm\n0,1\n\x00\x01", {}, r"binary data \(a NUL byte at offset 21\)"),
+        (b"time_s,torque_Nm\n0,1\n\x00\x01", {}, r"binary data \(a NUL character on line 3\)"),
     ],
 )
 def test_a_file_the_options_do_not_fit_is_refused_naming_what(tmp_path, content: bytes,

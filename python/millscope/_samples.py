@@ -24,7 +24,7 @@ def real_option(name: str, value: object, low: float, high: float, valid: str) -
     """``value`` as float when a real number (not a bool) with ``low <= value < high``; else
     :func:`bad_option` with ``valid``."""
     if not (isinstance(value, Real) and not isinstance(value, (bool, np.bool_))
-            and math.isfinite(value) and low <= value < high):
+            and math.isfinite(float(value)) and low <= float(value) < high):
         raise bad_option(name, value, valid)
     return float(value)
 

@@ -181,10 +181,6 @@ def _decode(raw: bytes, encoding: str | None, where: str) -> str:
         elif raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
             encoding = "utf-16"
         else:
-            nul = raw.find(b"\0")
-            if nul >= 0:
-                raise RecordError(f"{where}: binary data (a NUL byte at offset {nul}), not a "
-                                  "text file; a torque CSV is text (.npz records are zip files)")
             try:
                 return raw.decode("utf-8")
             except UnicodeDecodeError:
@@ -201,8 +197,8 @@ def parse_meta(text: str, where: str) -> dict[str, Any]:
     """The JSON object in ``text`` (a record's meta); anything else raises RecordError."""
     try:
         meta = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise RecordError(f"{where}: meta is not valid JSON ({exc})") from None
+    except ValueError as exc:  # JSONDecodeError, or an integer of over 4300 digits
+        raise RecordError(f"{where}: meta is not valid JSON ({_quoted(str(exc), 200)})") from None
     except RecursionError:
         raise RecordError(f"{where}: meta is nested too deeply to read") from None
     if not isinstance(meta, Mapping):
@@ -347,7 +343,7 @@ def _numbers(cells: Any, decimal: str, lines: NDArray[np.int64], column: _Column
 def _seconds(cells: Any, lines: NDArray[np.int64], column: _Column,
              where: str) -> tuple[NDArray[np.float64], str]:
     """ISO 8601 date-times as seconds since the first, and the first as text."""
-    import pandas as pd
+    import pandas as pd  # type: ignore[import-untyped]
 
     stamps = pd.to_datetime(cells.str.strip(), format="ISO8601", utc=True, errors="coerce")
     bad = np.flatnonzero(stamps.isna().to_numpy())
@@ -365,28 +361,43 @@ def _to_si(values: NDArray[np.float64], unit: str, table: dict[str, tuple[float,
     return values * multiplier / divisor
 
 
-def read_torque_csv(path: Path, options: CsvOptions) -> tuple[
-        NDArray[np.float64], NDArray[np.float64], dict[str, Any]]:
-    """(time in s, torque in N m, meta) of a torque CSV file; RecordError names the file and
-    line of any problem."""
-    import pandas as pd
+@dataclass(frozen=True)
+class _Layout:
+    """Where the parts of a file are: the separator, the header (None without one) and its
+    line number, the units line, and the first data row (an index into the content lines)."""
 
-    where = str(path)
-    text = _decode(path.read_bytes(), options.encoding, where)
-    meta: dict[str, Any] = {}
-    kept: list[int] = []  # indices of the lines that hold fields
+    sep: str
+    header: list[str] | None
+    header_line: int | None
+    units_row: list[str] | None
+    start: int
+    first_row: list[str]
+
+
+def _content(text: str, skiprows: int, where: str) -> tuple[list[str], list[int], dict[str, Any]]:
+    """(all lines, the indices of those holding fields, the meta of a ``# meta:`` line):
+    blank lines, comments and the first ``skiprows`` lines hold no fields."""
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    meta: dict[str, Any] = {}
+    kept: list[int] = []
     for i, line in enumerate(lines):
+        if "\0" in line:
+            raise RecordError(f"{where}: binary data (a NUL character on line {i + 1}), not a "
+                              "text file; a torque CSV is text (.npz records are zip files)")
         stripped = line.strip()
-        if not stripped or i < (options.skiprows or 0):
+        if not stripped or i < skiprows:
             continue
         if stripped.startswith(META_PREFIX):
             meta = parse_meta(stripped[len(META_PREFIX):], f"{where} line {i + 1}")
-            continue
-        if not stripped.startswith("#"):
+        elif not stripped.startswith("#"):
             kept.append(i)
+    return lines, kept, meta
+
+
+def _layout(lines: list[str], kept: list[int], sep: str | None, where: str) -> _Layout:
+    """The separator, header, units line and first data row, found in the first lines."""
     head = kept[:MAX_PREAMBLE_LINES]
-    sep = options.sep or _sniff_sep([lines[i] for i in head])
+    sep = sep or _sniff_sep([lines[i] for i in head])
     rows = [_split(lines[i], sep, f"{where} line {i + 1}") for i in head]
     start = next((k for k, fields in enumerate(rows) if _is_data(fields)), None)
     if start is None:
@@ -394,65 +405,87 @@ def read_torque_csv(path: Path, options: CsvOptions) -> tuple[
             raise RecordError(f"{where}: no row of numbers in the first {len(head)} lines; give "
                               "skiprows (the lines above the header)")
         start = len(rows)
-    preamble = [k for k in range(start) if len(rows[k]) >= 2]
-    header_k, units_k = (preamble[-1] if preamble else None), None
-    if len(preamble) >= 2 and _is_units_row(rows[preamble[-1]]) != _is_units_row(
-            rows[preamble[-2]]):
-        header_k, units_k = ((preamble[-2], preamble[-1]) if _is_units_row(rows[preamble[-1]])
-                             else (preamble[-1], preamble[-2]))
-    header = None if header_k is None else [h.strip() for h in rows[header_k]]
-    units_row = None if units_k is None else rows[units_k]
-    header_line = None if header_k is None else head[header_k] + 1
-    at = where if header_line is None else f"{where} line {header_line}"
-    if header is None and start == len(rows):
-        raise RecordError(f"{where}: no header line; expected columns "
-                          f"{NATIVE['time']},{NATIVE['torque']}")
+    preamble = [k for k in range(start) if len(rows[k]) >= 2]  # titles have one field
+    if not preamble:
+        if start == len(rows):
+            raise RecordError(f"{where}: no header line; expected columns "
+                              f"{NATIVE['time']},{NATIVE['torque']}")
+        return _Layout(sep, None, None, None, start, rows[start])
+    header_k, units_k = preamble[-1], None
+    if len(preamble) >= 2:  # a units line just above or below the header
+        above, below = (_is_units_row(rows[k]) for k in preamble[-2:])
+        if above != below:
+            header_k, units_k = (preamble[-2], preamble[-1]) if below else (preamble[-1],
+                                                                            preamble[-2])
+    return _Layout(sep, [h.strip() for h in rows[header_k]], head[header_k] + 1,
+                   None if units_k is None else rows[units_k], start,
+                   rows[start] if start < len(rows) else [])
+
+
+def _table(lines: list[str], data: list[int], layout: _Layout, columns: int,
+           where: str) -> Any:
+    """The data rows as a pandas DataFrame of str, ``columns`` wide; a longer row raises."""
+    import pandas as pd  # type: ignore[import-untyped]
+
+    limit = ("the first data row" if layout.header is None else
+             f"the {len(layout.header)} of the header (line {layout.header_line})")
+    try:
+        # not usecols: with it, pandas drops the fields of a row longer than the header
+        frame = pd.read_csv(io.StringIO("\n".join(lines[i] for i in data)), sep=layout.sep,
+                            header=None, names=range(columns), dtype=str, index_col=False,
+                            na_filter=False, engine="c", quotechar='"')
+    except pd.errors.ParserError as exc:
+        message = str(exc).strip().splitlines()[-1]
+        match = re.search(r"Expected \d+ fields in line (\d+), saw (\d+)", message)
+        if match:
+            raise RecordError(f"{where} line {data[int(match[1]) - 1] + 1}: {match[2]} fields, "
+                              f"more than {limit}") from None
+        raise RecordError(f"{where}: {message}") from None
+    width = columns if layout.header is None else len(layout.header)
+    for c in range(width, columns):  # beyond the header, only empty fields (a trailing sep)
+        filled = np.flatnonzero(frame[c].str.strip().to_numpy() != "")
+        if filled.size:
+            raise RecordError(f"{where} line {data[int(filled[0])] + 1}: more fields than "
+                              f"{limit}")
+    return frame
+
+
+def read_torque_csv(path: Path, options: CsvOptions) -> tuple[
+        NDArray[np.float64], NDArray[np.float64], dict[str, Any]]:
+    """(time in s, torque in N m, meta) of a torque CSV file; RecordError names the file and
+    line of any problem."""
+    where = str(path)
+    text = _decode(path.read_bytes(), options.encoding, where)
+    lines, kept, meta = _content(text, options.skiprows or 0, where)
+    layout = _layout(lines, kept, options.sep, where)
+    header = layout.header
+    at = where if layout.header_line is None else f"{where} line {layout.header_line}"
     time_index = _pick("time", options.time_column, header, None, at)
     torque_index = _pick("torque", options.torque_column, header, time_index, at)
     if time_index == torque_index:
         raise RecordError(f"{at}: time and torque are the same column {time_index}")
-    data = kept[start:]
+    data = kept[layout.start:]
     if not data:
         raise RecordError(f"{at}: no data rows under the header; a record needs at least 2 "
                           "samples")
-    width = len(rows[start]) if start < len(rows) else 0
-    columns = max(width, len(header) if header is not None else width)
+    first = layout.first_row
+    columns = max(len(first), len(header or []))
     for option, index in (("time_column", time_index), ("torque_column", torque_index)):
         if index >= columns:
             raise RecordError(f"{at}: {option} = {index} is not valid; it must be an index in "
-                              f"0..{columns - 1}, the columns {header or rows[start]}")
-    first = rows[start]
-    time_col = _unit("time", options.time_unit, time_index, header, units_row,
+                              f"0..{columns - 1}, the columns {header or first}")
+    time_col = _unit("time", options.time_unit, time_index, header, layout.units_row,
                      first[time_index] if time_index < len(first) else "", at)
-    torque_col = _unit("torque", options.torque_unit, torque_index, header, units_row,
+    torque_col = _unit("torque", options.torque_unit, torque_index, header, layout.units_row,
                        first[torque_index] if torque_index < len(first) else "", at)
+    sample = [f.strip() for i in data[:MAX_PREAMBLE_LINES]
+              for f in _split(lines[i], layout.sep, f"{where} line {i + 1}")]
     decimal = options.decimal or (
-        "," if sep != "," and any(_COMMA_DECIMAL.fullmatch(f.strip())
-                                  for fields in rows[start:] for f in fields) else ".")
-    if decimal == sep:
+        "," if layout.sep != "," and any(_COMMA_DECIMAL.fullmatch(f) for f in sample) else ".")
+    if decimal == layout.sep:
         raise RecordError(f"{where}: decimal = {decimal!r} is the separator too; give sep")
-    extra = list(range(len(header), columns)) if header is not None else []
+    frame = _table(lines, data, layout, columns, where)
     line_numbers = np.asarray(data, dtype=np.int64) + 1
-    try:
-        frame = pd.read_csv(io.StringIO("\n".join(lines[i] for i in data)), sep=sep,
-                            header=None, names=range(columns), dtype=str, index_col=False,
-                            na_filter=False, engine="c", quotechar='"')
-        # (not usecols: with it, pandas drops the fields of a row longer than the header)
-    except pd.errors.ParserError as exc:
-        message = str(exc).strip().splitlines()[-1]
-        match = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", message)
-        if match:
-            k = int(match[2]) - 1
-            limit = "the header" if header is not None else "the first data row"
-            raise RecordError(f"{where} line {line_numbers[k]}: {match[3]} fields, more than "
-                              f"the {columns} of {limit}") from None
-        raise RecordError(f"{where}: {message}") from None
-    for c in extra:
-        filled = np.flatnonzero(frame[c].str.strip().to_numpy() != "")
-        if filled.size:
-            k = int(filled[0])
-            raise RecordError(f"{where} line {line_numbers[k]}: more fields than the "
-                              f"{len(header or [])} of the header (line {header_line})")
     if time_col.unit == ISO_TIME:
         time, origin = _seconds(frame[time_index], line_numbers, time_col, where)
         meta = {**meta, "time_origin": origin}

@@ -121,7 +121,11 @@ def _read_npz(source: Path) -> tuple[NDArray[Any], NDArray[Any], dict[str, Any]]
     where = str(source)
     try:
         with zipfile.ZipFile(source) as archive:
-            for info in archive.infolist():  # a name differing from its local header raises
+            members = archive.infolist()
+            if len(members) > 64:
+                raise RecordError(f"{where}: not a millscope record: {len(members)} members; a "
+                                  "record has 3 (time_s, torque_Nm, meta_json)")
+            for info in members:  # a name differing from its local header raises
                 archive.open(info).close()
             time = _npz_member(archive, TIME_COLUMN, where)
             torque = _npz_member(archive, TORQUE_COLUMN, where)
