@@ -169,6 +169,34 @@ def test_a_byte_flipped_npz_is_refused_or_reads_the_same_record(tmp_path, positi
     assert back.meta == RECORD.meta
 
 
+CSV_FILES = (b'# meta: {"a": 1}\ntime_s,torque_Nm\n0,1\n0.01,2\n0.02,3\n',
+             "Mühle\nZeit [s];Drehmoment [kNm]\n0,00;1,5\n0,01;2,5\n0,02;3,5\n".encode("latin-1"),
+             b"Timestamp,Torque [Nm]\n2024-03-01T12:00:00.000,1\n2024-03-01T12:00:00.010,2\n"
+             b"2024-03-01T12:00:00.020,3\n",
+             b'Title\nTime;Torque\ns;Nm\n"0";"1"\n"0.01";"2"\n0.02;3\n')
+
+
+@settings(max_examples=200, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(base=st.sampled_from(CSV_FILES), position=st.integers(min_value=0, max_value=120),
+       inserted=st.sampled_from([b'"', b"\x00", b"\n", b";", b","]) | st.binary(max_size=3),
+       removed=st.integers(min_value=0, max_value=4))
+def test_an_edited_csv_is_a_record_or_one_record_error(tmp_path, base: bytes, position: int,
+                                                       inserted: bytes, removed: int) -> None:
+    """Bytes inserted or removed anywhere (a quote left open, a NUL, a line break, a
+    separator ...): a record, or a RecordError naming the file; never another exception, a
+    warning (errors under pytest) or pandas joining lines."""
+    position = min(position, len(base))
+    path = tmp_path / "m.csv"
+    path.write_bytes(base[:position] + inserted + base[position + removed:])
+    try:
+        rec = ms.TorqueRecord.load(path)
+    except ms.RecordError as exc:
+        assert "m.csv" in str(exc)
+        return
+    assert 2 <= len(rec) <= 3 and np.all(np.isfinite(rec.torque_Nm))
+
+
 # -- item 11: numbers are ASCII numbers, rows fit the header, torque is real -----------------
 @pytest.mark.parametrize(
     ("row", "message"),
@@ -178,6 +206,7 @@ def test_a_byte_flipped_npz_is_refused_or_reads_the_same_record(tmp_path, positi
         ("0.01,١٢", r"line 3: column 'torque_Nm': '١٢' is not a number"),
         ("0.01,２", r"line 3: column 'torque_Nm': '２' is not a number"),
         ("0.01,1+2j", r"line 3: column 'torque_Nm': '1\+2j' is not a number"),
+        ('"0.01,2', r'line 3: a quote " is not closed on its line'),  # pandas would join lines
     ],
 )
 def test_a_row_that_is_not_two_ascii_numbers_is_refused(tmp_path, capsys, row: str,

@@ -28,6 +28,7 @@ import csv
 import io
 import json
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -429,11 +430,20 @@ def _table(lines: list[str], data: list[int], layout: _Layout, columns: int,
 
     limit = ("the first data row" if layout.header is None else
              f"the {len(layout.header)} of the header (line {layout.header_line})")
+    block = "\n".join(lines[i] for i in data)
+    if '"' in block:  # a quote left open would join lines into one field
+        odd = next((i for i in data if lines[i].count('"') % 2), None)
+        if odd is not None:
+            raise RecordError(f"{where} line {odd + 1}: a quote \" is not closed on its line")
     try:
-        # not usecols: with it, pandas drops the fields of a row longer than the header
-        frame = pd.read_csv(io.StringIO("\n".join(lines[i] for i in data)), sep=layout.sep,
-                            header=None, names=range(columns), dtype=str, index_col=False,
-                            na_filter=False, engine="c", quotechar='"')
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            # not usecols: with it, pandas drops the fields of a row longer than the header
+            frame = pd.read_csv(io.StringIO(block), sep=layout.sep, header=None,
+                                names=range(columns), dtype=str, index_col=False,
+                                na_filter=False, engine="c", quotechar='"')
+    except pd.errors.ParserWarning as exc:
+        raise RecordError(f"{where}: {exc}") from None
     except pd.errors.ParserError as exc:
         message = str(exc).strip().splitlines()[-1]
         match = re.search(r"Expected \d+ fields in line (\d+), saw (\d+)", message)
@@ -441,6 +451,8 @@ def _table(lines: list[str], data: list[int], layout: _Layout, columns: int,
             raise RecordError(f"{where} line {data[int(match[1]) - 1] + 1}: {match[2]} fields, "
                               f"more than {limit}") from None
         raise RecordError(f"{where}: {message}") from None
+    if len(frame) != len(data):
+        raise RecordError(f"{where}: {len(data)} data lines read as {len(frame)} rows")
     width = columns if layout.header is None else len(layout.header)
     for c in range(width, columns):  # beyond the header, only empty fields (a trailing sep)
         filled = np.flatnonzero(frame[c].str.strip().to_numpy() != "")
