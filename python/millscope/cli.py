@@ -77,7 +77,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     from .record import TorqueRecord
     from .spectral import RemoveItem, band_stop, spectrum
 
-    raw = TorqueRecord.load(args.file)
+    raw = TorqueRecord.load(args.file, **torque_file_options(args))
     lines: list[float] = []
     if args.drive is not None:
         drive = DriveTrain.load(args.drive)
@@ -132,7 +132,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
 
     calibration = Calibration.load(args.calibration)
     drive = None if args.drive is None else DriveTrain.load(args.drive)
-    record = TorqueRecord.load(args.file)
+    record = TorqueRecord.load(args.file, **torque_file_options(args))
     with warnings.catch_warnings(record=True) as caught:  # printed with the header below
         warnings.simplefilter("always")
         result = monitor_record(record, calibration, step_s=args.step, drive=drive,
@@ -283,6 +283,44 @@ def cmd_advise(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_torque_file_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of :meth:`millscope.TorqueRecord.from_csv` for a torque text file."""
+    g = p.add_argument_group("torque text file", "how to read a CSV or text torque file "
+                             "(plant exports); what is not given is sniffed from the file")
+    g.add_argument("--time-column", type=_column, help="time column: header name or index from 0")
+    g.add_argument("--torque-column", type=_column,
+                   help="torque column: header name or index from 0")
+    g.add_argument("--time-unit", help="unit of the time column: s, ms, min, h, or iso (ISO "
+                                       "8601 date-times)")
+    g.add_argument("--torque-unit", help="unit of the torque column: 'N m', 'kN m' or 'MN m'")
+    g.add_argument("--sep", type=_separator, help="field separator, one character ('\\t': tab)")
+    g.add_argument("--decimal", help="decimal mark, '.' or ','")
+    g.add_argument("--skip-rows", type=int, help="lines at the top skipped before the header")
+    g.add_argument("--encoding", help="text encoding, e.g. utf-8 or latin-1")
+    g.add_argument("--resample", action="store_true",
+                   help="interpolate jittered time stamps onto uniform times (within --jitter-tol)")
+    g.add_argument("--jitter-tol", type=float,
+                   help="largest time-step deviation --resample accepts, relative to the mean "
+                        "step, in (0, 0.5) (default 0.01)")
+
+
+def _column(text: str) -> str | int:
+    return int(text) if text.isascii() and text.isdigit() else text
+
+
+def _separator(text: str) -> str:
+    return "\t" if text in ("\\t", "tab") else text
+
+
+def torque_file_options(args: argparse.Namespace) -> dict[str, object]:
+    """The from_csv keyword options given on the command line."""
+    given = {"time_column": args.time_column, "torque_column": args.torque_column,
+             "time_unit": args.time_unit, "torque_unit": args.torque_unit, "sep": args.sep,
+             "decimal": args.decimal, "skiprows": args.skip_rows, "encoding": args.encoding,
+             "resample": args.resample or None, "jitter_rtol": args.jitter_tol}
+    return {k: v for k, v in given.items() if v is not None}
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="millscope",
@@ -315,6 +353,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="analysis band 0..BAND_HZ, Hz (default 50, the paper's); records sampled "
                         "faster than 2.5 x BAND_HZ are decimated to that rate first")
     p.add_argument("--out", default="out", help="folder for the plots (default out)")
+    add_torque_file_arguments(p)
     p.set_defaults(func=cmd_analyze)
 
     p = sub.add_parser("monitor", help="filling estimate per window of a long torque record",
@@ -334,6 +373,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="analysis band 0..BAND_HZ, Hz, for a calibration that does not give "
                         "one (format 1): the Nyquist frequency of its records (50 for 10 ms "
                         "samples); default: the calibration's")
+    add_torque_file_arguments(p)
     p.set_defaults(func=cmd_monitor)
 
     p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",

@@ -11,30 +11,133 @@ Files:
 * ``.csv``: a header line ``time_s,torque_Nm`` (other columns are ignored on reading); the meta
   goes on a first comment line ``# meta: {...json...}``.
 
-Both are written atomically (temporary file, then rename).
+Both are written atomically (temporary file, then rename). Reading takes plant exports too
+(:meth:`TorqueRecord.from_csv`: separators, decimal commas, units, titles, encodings, ISO
+times, jittered time stamps). Files are untrusted input: every problem raises
+:class:`RecordError` naming the file, and an npz is checked before its arrays are allocated.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import json
+import math
 import os
+import stat
+import zipfile
+import zlib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._files import atomic_write
-from ._samples import RecordError, check_samples
+from ._samples import RecordError, bad_option, check_samples, real_option, step_jitter
+from ._torque_csv import CsvOptions, parse_meta, read_torque_csv
 
 __all__ = ["TorqueRecord", "RecordError"]
 
 TIME_COLUMN = "time_s"
 TORQUE_COLUMN = "torque_Nm"
 _META_PREFIX = "# meta:"
+MAX_RECORD_SAMPLES = 10**9  # an npz array claiming more is refused before it is read
+_NPZ_ERRORS = (zipfile.BadZipFile, zlib.error, OSError, EOFError, ValueError, KeyError,
+               NotImplementedError, RuntimeError, OverflowError)  # what a damaged zip raises
+
+
+def _real_array(values: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``values`` as float64; complex, text and other non-real data raise RecordError."""
+    array = np.asarray(values)
+    kind = array.dtype.kind
+    if kind == "c":
+        raise RecordError(f"TorqueRecord: {name} is complex ({array.dtype}); a record holds "
+                          "real values: pass the real part (or the magnitude) explicitly")
+    if kind not in "biufO":
+        raise RecordError(f"TorqueRecord: {name} holds {array.dtype} values, not real numbers")
+    try:
+        return np.array(array, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise RecordError(f"TorqueRecord: {name} holds values that are not real numbers "
+                          f"({exc})") from None
+
+
+def _file_start(source: Path) -> bytes:
+    """The first bytes of a regular file; a missing file, a directory or a device raises."""
+    try:
+        mode = source.stat().st_mode
+    except FileNotFoundError:
+        raise RecordError(f"{source}: no such file") from None
+    if stat.S_ISDIR(mode):
+        raise RecordError(f"{source}: is a directory, not a record file")
+    if not stat.S_ISREG(mode):
+        raise RecordError(f"{source}: not a regular file")
+    with source.open("rb") as fh:
+        return fh.read(8)
+
+
+def _npz_member(archive: zipfile.ZipFile, key: str, where: str) -> NDArray[Any]:
+    """The array ``key`` of an npz, its npy header checked against the member's size (and a
+    sane bound) before the data are read."""
+    try:
+        info = archive.getinfo(f"{key}.npy")
+    except KeyError:
+        raise RecordError(f"{where}: not a millscope record: it holds no {key!r} array (found "
+                          f"{archive.namelist()[:5]}; a record holds time_s, torque_Nm and "
+                          "meta_json, a JSON object as text)") from None
+    with archive.open(info) as fp:
+        version = np.lib.format.read_magic(fp)
+        if version == (1, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fp)
+        elif version == (2, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fp)
+        else:
+            raise RecordError(f"{where}: {key}.npy has npy format {version}; 1.0 or 2.0 is read")
+        size = info.file_size - fp.tell()
+        count = math.prod(shape)
+        wanted = "a text (meta_json)" if key == "meta_json" else "real numbers"
+        if dtype.hasobject or dtype.kind not in ("U" if key == "meta_json" else "iuf"):
+            raise RecordError(f"{where}: {key}.npy holds {dtype} values, not {wanted}")
+        if len(shape) != (0 if key == "meta_json" else 1) or count > MAX_RECORD_SAMPLES:
+            raise RecordError(f"{where}: {key}.npy claims shape {shape}; a record holds 1-D "
+                              f"arrays of at most {MAX_RECORD_SAMPLES:.0e} samples")
+        if count * dtype.itemsize != size:
+            raise RecordError(f"{where}: {key}.npy claims {count} values of {dtype} "
+                              f"({count * dtype.itemsize} bytes) but holds {size} bytes")
+        data = _read_exactly(fp, size)
+    return np.frombuffer(data, dtype=dtype).reshape(shape, order="F" if fortran else "C")
+
+
+def _read_exactly(fp: IO[bytes], size: int) -> bytes:
+    """``size`` bytes and the end of ``fp`` (where zipfile checks the CRC)."""
+    data = fp.read(size + 1)
+    if len(data) != size:
+        raise EOFError(f"{size} bytes expected, {len(data)} found")
+    return data
+
+
+def _read_npz(source: Path) -> tuple[NDArray[Any], NDArray[Any], dict[str, Any]]:
+    """(time, torque, meta) of an npz record; any damage raises RecordError."""
+    where = str(source)
+    try:
+        with zipfile.ZipFile(source) as archive:
+            members = archive.infolist()
+            if len(members) > 64:
+                raise RecordError(f"{where}: not a millscope record: {len(members)} members; a "
+                                  "record has 3 (time_s, torque_Nm, meta_json)")
+            for info in members:  # a name differing from its local header raises
+                archive.open(info).close()
+            time = _npz_member(archive, TIME_COLUMN, where)
+            torque = _npz_member(archive, TORQUE_COLUMN, where)
+            # meta_json is required (save always writes it): a damaged central directory can
+            # hide a member, and a record without its meta would be read as another record
+            meta = parse_meta(str(_npz_member(archive, "meta_json", where)[()]), where)
+    except RecordError:
+        raise
+    except _NPZ_ERRORS as exc:
+        raise RecordError(f"{where}: not a millscope record ({type(exc).__name__}: "
+                          f"{str(exc)[:200]})") from None
+    return time, torque, meta
 
 
 class TorqueRecord:
@@ -54,21 +157,24 @@ class TorqueRecord:
     Raises
     ------
     RecordError
-        (a ``ValueError``) for non-finite samples, non-monotonic or uneven time, mismatched
-        lengths or fewer than 2 samples; the message names the sample and the values.
+        (a ``ValueError``) for complex or text values, non-finite samples, non-monotonic or
+        uneven time, mismatched lengths or fewer than 2 samples; the message names the sample
+        and the values.
     """
 
     __slots__ = ("_time", "_torque", "_meta")
 
     def __init__(self, time_s: ArrayLike, torque_Nm: ArrayLike,
                  meta: Mapping[str, Any] | None = None, *, uniform_rtol: float = 1e-6) -> None:
-        time = np.array(time_s, dtype=np.float64)
-        torque = np.array(torque_Nm, dtype=np.float64)
+        time = _real_array(time_s, "time_s")
+        torque = _real_array(torque_Nm, "torque_Nm")
         check_samples(time, torque, uniform_rtol, "TorqueRecord")
         time.flags.writeable = False
         torque.flags.writeable = False
         self._time = time
         self._torque = torque
+        if meta is not None and not isinstance(meta, Mapping):
+            raise RecordError(f"TorqueRecord: meta must be a mapping; got {type(meta).__name__}")
         self._meta = dict(meta or {})
         try:
             json.dumps(self._meta)
@@ -169,80 +275,138 @@ class TorqueRecord:
         return target
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> TorqueRecord:
-        """Read a record from ``.npz`` or ``.csv`` (chosen by suffix)."""
+    def load(cls, path: str | os.PathLike[str], **csv_options: Any) -> TorqueRecord:
+        """Read a record: an ``.npz`` record (a zip archive, told by its content) or else a
+        text file read by :meth:`from_csv`, whatever its suffix (``.csv``, ``.tsv``, ``.txt``).
+
+        Parameters
+        ----------
+        path : str or path-like
+        **csv_options
+            Keyword options of :meth:`from_csv` (refused for an npz record).
+
+        Raises
+        ------
+        RecordError
+            for a missing, damaged or foreign file (a ``.npy`` array, a zip without the
+            record's arrays, an npz header claiming more data than the file holds ...).
+        """
         source = Path(path)
-        if source.suffix.lower() == ".csv":
-            return cls.from_csv(source)
-        if not source.is_file():
-            raise RecordError(f"{source}: no such file")
-        try:
-            with np.load(source, allow_pickle=False) as data:
-                time, torque = data[TIME_COLUMN], data[TORQUE_COLUMN]
-                meta = json.loads(str(data["meta_json"])) if "meta_json" in data else {}
-        except (OSError, KeyError, ValueError) as exc:
-            raise RecordError(f"{source}: not a millscope record ({exc})") from None
+        start = _file_start(source)
+        if start.startswith(b"\x93NUMPY"):
+            raise RecordError(f"{source}: a single .npy array, not a record; a record .npz holds "
+                              "time_s, torque_Nm and meta_json (TorqueRecord.save)")
+        if not start.startswith(b"PK"):
+            if source.suffix.lower() == ".npz":
+                what = "an empty file" if not start else "not a zip archive"
+                raise RecordError(f"{source}: not a millscope record ({what}; an .npz record is "
+                                  "a zip of .npy arrays)")
+            return cls.from_csv(source, **csv_options)
+        given = sorted(k for k, v in csv_options.items() if v is not None and v is not False)
+        if given:
+            raise RecordError(f"{source}: an npz record; the CSV options {', '.join(given)} "
+                              "apply to text files only")
+        time, torque, meta = _read_npz(source)
         return cls._validated(time, torque, meta, str(source))
 
     @classmethod
-    def from_csv(cls, path: str | os.PathLike[str], *, uniform_rtol: float = 1e-6) -> TorqueRecord:
-        """Read a CSV with columns ``time_s`` (s) and ``torque_Nm`` (N m).
+    def from_csv(cls, path: str | os.PathLike[str], *, uniform_rtol: float = 1e-6,
+                 time_column: str | int | None = None, torque_column: str | int | None = None,
+                 time_unit: str | None = None, torque_unit: str | None = None,
+                 sep: str | None = None, decimal: str | None = None,
+                 skiprows: int | None = None, encoding: str | None = None,
+                 resample: bool = False, jitter_rtol: float = 0.01) -> TorqueRecord:
+        """Read a torque CSV: millscope's own (``time_s,torque_Nm``, a ``# meta: {json}``
+        line) or a plant export.
 
-        Lines starting with ``#`` are comments (a ``# meta: {json}`` line becomes the meta);
-        further columns are ignored. Every problem raises :class:`RecordError` naming the file,
-        the line and the column.
+        Every option left None is sniffed (:mod:`millscope._torque_csv`): the encoding (BOM,
+        UTF-8, else latin-1), the separator (tab, ``;``, ``,``, ``|``), the decimal mark, the
+        header below any title lines and a units line beside it, the time and torque columns
+        (``time_s``/``torque_Nm``, else names like ``Time [ms]``, ``Zeit``, ``Timestamp``,
+        ``Torque (kN m)``, ``Drehmoment``) and their units (in the header or the units line;
+        ISO 8601 date-times become seconds since the first, kept as ``meta["time_origin"]``).
+        Lines starting with ``#`` are comments; further columns are ignored.
+
+        Parameters
+        ----------
+        path : str or path-like
+        uniform_rtol : float, default 1e-6
+            Largest deviation of a time step from the mean step, relative, taken as uniform.
+        time_column, torque_column : str or int, optional
+            The columns by header name (exact, or without the unit in any case) or index from 0.
+        time_unit : {"s", "ms", "min", "h", "iso"}, optional
+            Unit of the time column ("iso": ISO 8601 date-times); converted to s.
+        torque_unit : {"N m", "kN m", "MN m"}, optional
+            Unit of the torque column; converted to N m.
+        sep : str, optional
+            Field separator (one character).
+        decimal : {".", ","}, optional
+            Decimal mark.
+        skiprows : int, optional
+            Lines at the top of the file skipped before the header is looked for.
+        encoding : str, optional
+            Text encoding, e.g. "utf-8", "latin-1".
+        resample : bool, default False
+            When the time steps deviate from their mean by more than `uniform_rtol` but at
+            most `jitter_rtol` (a logger's jittered stamps), interpolate the torque linearly
+            onto the uniform times ``t0 + k dt`` (same count and span) and note it in
+            ``meta["resampled"]``; otherwise such a file is refused.
+        jitter_rtol : float, default 0.01
+            Largest step deviation, relative to the mean step, that `resample` accepts; in
+            (0, 0.5).
+
+        Raises
+        ------
+        ValueError
+            for an option out of its range (before the file is read).
+        RecordError
+            for every problem with the file, naming the file, the line and the column (a
+            field that is not an ASCII number, a row with more fields than the header,
+            unknown units, uneven sampling with the measured deviation ...).
         """
+        options = CsvOptions(time_column, torque_column, time_unit, torque_unit, sep, decimal,
+                             skiprows, encoding)
+        rtol = real_option("uniform_rtol", uniform_rtol, 0.0, math.inf, "a finite number >= 0")
+        jitter = real_option("jitter_rtol", jitter_rtol, 0.0, 0.5, "a number in (0, 0.5)")
+        if jitter == 0.0:
+            raise bad_option("jitter_rtol", jitter_rtol, "a number in (0, 0.5)")
+        if not isinstance(resample, (bool, np.bool_)):
+            raise bad_option("resample", resample, "True or False")
         source = Path(path)
-        if not source.is_file():
-            raise RecordError(f"{source}: no such file")
-        try:
-            text = source.read_text()
-        except UnicodeDecodeError:
-            raise RecordError(f"{source}: not a text file") from None
-        meta: dict[str, Any] = {}
-        rows: list[tuple[int, list[str]]] = []
-        for lineno, line in enumerate(io.StringIO(text), start=1):
-            stripped = line.strip()
-            if not stripped:
-                continue
-            if stripped.startswith(_META_PREFIX):
-                try:
-                    meta = json.loads(stripped[len(_META_PREFIX):])
-                except json.JSONDecodeError as exc:
-                    raise RecordError(f"{source} line {lineno}: meta is not valid JSON ({exc})"
-                                      ) from None
-                continue
-            if stripped.startswith("#"):
-                continue
-            rows.append((lineno, next(csv.reader([stripped]))))
-        if not rows:
-            raise RecordError(f"{source}: no header line; expected columns "
-                              f"{TIME_COLUMN},{TORQUE_COLUMN}")
-        header_line, header = rows[0]
-        header = [h.strip() for h in header]
-        missing = [c for c in (TIME_COLUMN, TORQUE_COLUMN) if c not in header]
-        if missing:
-            raise RecordError(f"{source} line {header_line}: missing column "
-                              f"{', '.join(repr(m) for m in missing)}; found {header}")
-        columns = [header.index(TIME_COLUMN), header.index(TORQUE_COLUMN)]
-        values = np.empty((len(rows) - 1, 2))
-        for r, (lineno, fields) in enumerate(rows[1:]):
-            for c, col in enumerate(columns):
-                name = header[col]
-                if col >= len(fields):
-                    raise RecordError(f"{source} line {lineno}: column {name!r} is missing "
-                                      f"(the line has {len(fields)} fields)")
-                try:
-                    values[r, c] = float(fields[col])
-                except ValueError:
-                    raise RecordError(f"{source} line {lineno}: column {name!r}: "
-                                      f"{fields[col]!r} is not a number") from None
-        return cls._validated(values[:, 0], values[:, 1], meta, str(source), uniform_rtol)
+        _file_start(source)
+        time, torque, meta = read_torque_csv(source, options)
+        if resample:
+            time, torque, meta = _resampled(time, torque, meta, str(source), rtol, jitter)
+        hint = ("resample it first, or read it with resample=True (command line: --resample) "
+                "when the deviation is a logger's jitter")
+        return cls._validated(time, torque, meta, str(source), rtol, hint)
 
     @classmethod
-    def _validated(cls, time: NDArray[np.float64], torque: NDArray[np.float64],
-                   meta: dict[str, Any], where: str, uniform_rtol: float = 1e-6) -> TorqueRecord:
-        time = np.asarray(time, dtype=np.float64)
-        torque = np.asarray(torque, dtype=np.float64)
-        check_samples(time, torque, uniform_rtol, where)
+    def _validated(cls, time: NDArray[Any], torque: NDArray[Any], meta: dict[str, Any],
+                   where: str, uniform_rtol: float = 1e-6,
+                   hint: str = "resample the record first") -> TorqueRecord:
+        time = _real_array(time, "time_s")
+        torque = _real_array(torque, "torque_Nm")
+        check_samples(time, torque, uniform_rtol, where, hint=hint)
         return cls(time, torque, meta, uniform_rtol=uniform_rtol)
+
+
+def _resampled(time: NDArray[np.float64], torque: NDArray[np.float64], meta: dict[str, Any],
+               where: str, uniform_rtol: float, jitter_rtol: float
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, Any]]:
+    """Samples at jittered times brought onto the uniform times ``t0 + k dt`` by linear
+    interpolation, when the largest step deviation lies in (`uniform_rtol`, `jitter_rtol`]."""
+    check_samples(time, torque, math.inf, where)  # finite, increasing, 2 or more
+    jitter, worst = step_jitter(time)
+    if jitter <= uniform_rtol:
+        return time, torque, meta
+    dt = (time[-1] - time[0]) / (time.size - 1)
+    if jitter > jitter_rtol:
+        raise RecordError(
+            f"{where}: sampling is not uniform: step {worst + 1} is "
+            f"{float(time[worst + 1] - time[worst])!r} s against a mean step of {float(dt)!r} s, "
+            f"a jitter of {jitter:.3g} relative; resampling accepts up to jitter_rtol = "
+            f"{jitter_rtol:g}: this is a gap or a change of rate, not jitter")
+    grid = time[0] + np.arange(time.size) * dt
+    resampled = np.interp(grid, time, torque)
+    return grid, resampled, {**meta, "resampled": {"max_jitter": jitter, "method": "linear"}}
