@@ -21,8 +21,10 @@ Every file is written atomically (a temporary file, then a rename), and only the
 called :meth:`Campaign.run` writes: workers return their record, so a dask cluster needs no
 shared file system. The files are the truth; the manifest is rebuilt from them at every start,
 so a campaign killed at any point resumes where it stopped and keeps every case whose file was
-written. A rerun skips finished cases and retries failed ones; a case that raises is recorded
-as failed and the others go on. Ctrl-C stops the campaign, keeping what has finished.
+written. The local pool's workers do not run the caller's main module (no ``__main__``
+guard needed) and end when the campaign process ends, even when it is killed. A rerun skips
+finished cases and retries failed ones; a case that raises is recorded as failed and the
+others go on. Ctrl-C stops the campaign, keeping what has finished.
 
 Typical use (DESIGN.md section 5)::
 
@@ -42,11 +44,17 @@ import dataclasses
 import hashlib
 import json
 import math
+import multiprocessing
+import multiprocessing.context
+import multiprocessing.process
 import os
 import signal
 import socket
+import sys
+import threading
 import time
 import traceback
+import types
 import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -87,6 +95,8 @@ _TRACEBACK_FRAMES = 12  # frames kept in a failed case's traceback summary (the 
 _TRACEBACK_CHARS = 8000
 _TERMINATE_WAIT_S = 10.0  # how long to wait for a terminated worker process to end, s
 _TICK_S = 5.0  # the progress bar is redrawn this often while no case finishes, s
+_ORPHAN_EXIT_CODE = 70  # a worker's exit status when it ends because its campaign died
+_MAIN_SWAP_LOCK = threading.Lock()  # one worker launch at a time hides __main__
 
 Status = Literal["done", "failed", "pending"]
 
@@ -555,10 +565,52 @@ def _remove_temporaries(store: Path) -> None:
 # -- the worker side ---------------------------------------------------------------------------
 
 
-def _ignore_sigint() -> None:
-    """Pool initializer: idle workers ignore Ctrl-C (the campaign handles it); a running
-    simulation still stops on it, and its case is then reported as failed."""
+def _start_worker() -> None:
+    """Pool initializer: idle workers ignore Ctrl-C (the campaign handles it; a running
+    simulation still stops on it, and its case is then reported as failed), and a watchdog
+    thread ends the worker as soon as the campaign process is gone (killed by SIGKILL or
+    SIGTERM): its case would be lost anyway, and an orphaned worker would otherwise wait on its
+    queue for ever, holding the caller's stdout and multiprocessing's resource tracker."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    parent = multiprocessing.parent_process()
+    if parent is not None:
+        threading.Thread(target=_exit_with, args=(parent,), name="millscope-orphan-watchdog",
+                         daemon=True).start()
+
+
+def _exit_with(parent: multiprocessing.process.BaseProcess) -> None:
+    """Waits for ``parent`` to end, then ends this process at once. The wait is on the
+    parent's sentinel (a pipe that reads end-of-file when the parent dies, or its process
+    handle on Windows), so it costs nothing while the parent lives."""
+    parent.join()
+    os._exit(_ORPHAN_EXIT_CODE)
+
+
+class _WorkerProcess(multiprocessing.context.SpawnProcess):
+    """A spawned process that does not run the caller's main module.
+
+    ``spawn`` (and ``forkserver``) children import the parent's ``__main__`` (a script by its
+    path, ``python -m`` by its name) so that functions defined there can be unpickled; a script
+    without an ``if __name__ == "__main__":`` guard then starts its campaign again in every
+    worker. A campaign's workers need nothing from ``__main__`` (they call :func:`run_case` with
+    a plain dict), so while this process is launched ``__main__`` is a bare module and the child
+    is told of no main module, as when started from a notebook or the REPL."""
+
+    @staticmethod
+    def _Popen(process_obj: Any) -> Any:  # multiprocessing's hook, called by start()
+        with _MAIN_SWAP_LOCK:
+            main = sys.modules["__main__"]
+            sys.modules["__main__"] = types.ModuleType("__main__")
+            try:
+                return multiprocessing.context.SpawnProcess._Popen(process_obj)
+            finally:
+                sys.modules["__main__"] = main
+
+
+class _WorkerContext(multiprocessing.context.SpawnContext):
+    """The ``spawn`` context with :class:`_WorkerProcess` processes: the local pool's."""
+
+    Process = _WorkerProcess
 
 
 def _traceback_summary(exc: BaseException) -> str:
@@ -860,6 +912,9 @@ class Campaign:
         ----------
         executor : None, concurrent.futures.Executor or dask.distributed.Client
             None: a local process pool (spawned processes) of ``max_workers`` processes.
+            Its workers do not import the caller's main module, so a script or notebook needs
+            no ``if __name__ == "__main__":`` guard; they end as soon as this process ends,
+            even when it is killed.
             Anything with ``submit(fn, *args)`` returning futures works; for a dask Client,
             ``distributed.as_completed`` collects them. Its workers must import millscope;
             with threads per case > 1, give each worker process that many cores.
@@ -938,14 +993,13 @@ class Campaign:
                  max_workers: int | None, cores: int, progress: bool) -> None:
         pool = None
         if executor is None:
-            import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
 
             threads = max(self._cases[k].settings.threads for k in todo)
             workers = max_workers or max(1, cores // threads)
             pool = ProcessPoolExecutor(max_workers=min(workers, len(todo)),
-                                       mp_context=multiprocessing.get_context("spawn"),
-                                       initializer=_ignore_sigint)
+                                       mp_context=_WorkerContext(),
+                                       initializer=_start_worker)
             executor = pool
         futures: dict[Any, int] = {}
         done_before = sum(1 for d in self._hashes if entries[d]["status"] == "done")
