@@ -256,11 +256,11 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
     settings = campaign.analysis
     t1, t2 = settings.block
     counts = {s: sum(r.status == s for r in results) for s in ("done", "failed", "pending")}
+    cases = len({r.hash for r in results} | {c.hash for c in unreadable})  # each case once
     lines = [
         "# millscope campaign report",
         "",
-        f"Store `{campaign.store}`: {len(results) + len(unreadable)} cases, "
-        f"{counts['done']} done, {counts['failed']} failed"
+        f"Store `{campaign.store}`: {cases} cases, {counts['done']} done, {counts['failed']} failed"
         + (f", **{len(unreadable)} could not be read** (listed under \"Unreadable case "
            "files\", left out of the rest)" if unreadable else "")
         + f". millscope {_core.build_info()['version']}, {time.strftime('%Y-%m-%d %H:%M')}.",
