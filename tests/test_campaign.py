@@ -420,6 +420,28 @@ def test_a_case_file_with_nan_torque_is_computed_again(tmp_path: Path) -> None:
     assert unreadable_cases(store) == []
 
 
+def test_a_damaged_failure_record_is_unreadable_unless_the_case_finished(tmp_path: Path
+                                                                         ) -> None:
+    """A failed case's JSON cut short is listed with its reason (and its case is pending with
+    that reason); beside a whole finished file of the same case it does not matter."""
+    from .synthetic_campaign import synthetic_store
+
+    store = tmp_path / "store"
+    scenes = ms.presets.paper_cases("ceramic", 0.71, [1, 2], scale="tiny")
+    done, failed = synthetic_store(store, scenes, fail=["LDMS#2"])
+    failure = store / "cases" / f"{failed.hash}.failed.json"
+    whole = failure.read_text()
+    failure.write_text(whole[:40])
+    (bad,) = unreadable_cases(store)
+    assert (bad.file, bad.name) == (f"cases/{failure.name}", "LDMS#2 seed 0")
+    assert bad.reason.startswith("not valid JSON (Expecting ")
+    result = ms.Campaign(scenes, store, duration=14.0).results()[1]
+    assert result.status == "pending" and result.error is not None and bad.reason in result.error
+    (store / "cases" / f"{done.hash}.failed.json").write_text(whole[:40])  # beside a whole npz
+    failure.write_text(whole)
+    assert unreadable_cases(store) == []
+
+
 def test_a_store_in_use_is_refused(tmp_path: Path) -> None:
     store = tmp_path / "store"
     store.mkdir()

@@ -493,7 +493,10 @@ def _open_failed(path: Path) -> dict[str, Any]:
     try:
         if path.is_dir():
             raise _Unreadable("a directory, not a case file")
-        info = read_json(path, "failed case")
+        try:
+            info = read_json(path, "failed case")
+        except ValueError as exc:  # the message starts with the path, which the caller names
+            raise _Unreadable(str(exc).removeprefix(f"{path}: ")) from None
         if not isinstance(info, dict):
             raise _Unreadable(f"holds a JSON {type(info).__name__}, not a failed case")
         digest = Case.from_dict(info.get("case")).hash()  # type: ignore[arg-type]
