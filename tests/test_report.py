@@ -8,6 +8,7 @@ import io
 import json
 import re
 import shutil
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -159,6 +160,16 @@ def _damage(path: Path, kind: str) -> None:
         path.mkdir()
     elif kind == "missing":
         path.unlink()
+    elif kind == "huge header":  # the torque's header claims 10**11 values
+        with zipfile.ZipFile(path) as archive:
+            members = {name: archive.read(name) for name in archive.namelist()}
+        header = io.BytesIO()
+        np.lib.format.write_array_header_1_0(
+            header, {"descr": "<f8", "fortran_order": False, "shape": (10**11,)})
+        members["torque_Nm.npy"] = header.getvalue() + bytes(80)
+        with zipfile.ZipFile(path, "w") as archive:
+            for name, content in members.items():
+                archive.writestr(name, content)
     else:
         with np.load(path) as npz:
             arrays = {name: npz[name] for name in npz.files}
@@ -173,7 +184,8 @@ def _damage(path: Path, kind: str) -> None:
 DAMAGE = {  # kind: what the reason must say
     "truncated": "BadZipFile", "flipped": "CRC", "empty": "an empty file",
     "directory": "a directory", "no meta": "no meta_json", "nan torque": "not finite",
-    "missing": "missing, although manifest.json lists the case as done"}
+    "missing": "missing, although manifest.json lists the case as done",
+    "huge header": "torque_Nm.npy declares 100000000000 values of float64"}
 
 
 @pytest.mark.parametrize("kind", list(DAMAGE))

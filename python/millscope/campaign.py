@@ -465,6 +465,8 @@ def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
                        if name not in data.files]
             if missing:
                 raise _Unreadable(f"no {' or '.join(missing)} in the file")
+            for name in ("time_s", "torque_Nm", "meta_json"):
+                _check_declared_size(data.zip, f"{name}.npy")
             arrays = {name: data[name] for name in ("time_s", "torque_Nm")}
             meta = json.loads(str(data["meta_json"]))
         for name, values in arrays.items():
@@ -485,6 +487,23 @@ def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
     if len(record) != expected:
         raise _Unreadable(f"it holds {len(record)} samples; its case gives {expected}")
     return info, record
+
+
+def _check_declared_size(archive: zipfile.ZipFile, member: str) -> None:
+    """Raises :class:`_Unreadable` when the ``.npy`` header of ``member`` declares more values
+    than the member holds, before numpy would allocate them."""
+    with archive.open(member) as fh:
+        version = np.lib.format.read_magic(fh)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+        else:
+            raise _Unreadable(f"{member} has .npy format {version}, not 1.0 or 2.0")
+    needed = math.prod(shape) * dtype.itemsize
+    if needed > archive.getinfo(member).file_size:
+        raise _Unreadable(f"{member} declares {math.prod(shape)} values of {dtype} "
+                          f"({needed} bytes) but holds {archive.getinfo(member).file_size} bytes")
 
 
 def _open_failed(path: Path) -> dict[str, Any]:
