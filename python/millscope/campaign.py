@@ -412,9 +412,10 @@ class CaseResult:
         if lifters is not None:
             a = analyze_block(blk, lifters=lifters.count, rotation_hz=case.scene.rotation_hz,
                               bandwidth=analysis.bandwidth, window=window)
-            values = {"mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
-                      "lth_amplitude": a.lth.amplitude, "energy": a.energy.energy,
-                      "energy_relative_std": a.energy.relative_std}
+            values: dict[str, Any] = {
+                "mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
+                "lth_amplitude": a.lth.amplitude, "energy": a.energy.energy,
+                "energy_relative_std": a.energy.relative_std}
         else:
             e = spectral_energy(blk, ["mean"], bandwidth=analysis.bandwidth, window=window)
             values = {"mean_torque": blk.mean_torque_Nm, "energy": e.energy,
@@ -1015,7 +1016,8 @@ class Campaign:
                                         "window": "hann"}
         if (path / "manifest.json").is_file():
             manifest = read_manifest(path)
-            order = [e.get("hash") for e in manifest.get("cases", []) if isinstance(e, dict)]
+            order = [e["hash"] for e in manifest.get("cases", [])
+                     if isinstance(e, dict) and isinstance(e.get("hash"), str)]
             if "analysis" in manifest:
                 saved = manifest["analysis"]
                 if saved is not None:
@@ -1172,7 +1174,7 @@ class Campaign:
         the store holds."""
         entries: dict[str, dict[str, Any]] = {}
         for c, digest in zip(self._cases, self._hashes, strict=True):
-            entries[digest] = on_disk.pop(digest, None) or {
+            entries[digest] = on_disk.pop(digest, {}) or {
                 "hash": digest, "name": c.scene.name, "seed": c.settings.seed,
                 "status": "pending", "file": None, "wall_time_s": None, "error": None,
                 "traceback": None}
