@@ -11,6 +11,7 @@ import dataclasses
 import fcntl
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -30,6 +31,7 @@ from millscope.campaign import (
     case_matrix,
     paper_matrix,
     read_manifest,
+    unreadable_cases,
 )
 from millscope.simulation import _available_cores
 
@@ -171,6 +173,81 @@ def test_ctrl_c_stops_at_once_and_keeps_finished_cases(tmp_path: Path) -> None:
     assert [e["status"] for e in read_manifest(store)["cases"]] == statuses
 
 
+# -- a script without a main guard; workers that end with their campaign -----------------------
+
+UNGUARDED_RUN = """
+import sys
+import millscope as ms
+from millscope.campaign import RunSettings
+
+print("the script runs", flush=True)
+settings = RunSettings(duration_s=0.3, settle_tolerance=10.0, settle_min_s=0.05,
+                       settle_max_s=0.1)
+scenes = [ms.presets.pilot_mill(0.71, None, 1, scale="tiny")]
+camp = ms.Campaign(scenes, sys.argv[1], settings=settings, block=(0.1, 0.3))
+print(" ".join(r.status for r in camp.run(max_workers=1, progress=False)))
+"""
+
+
+@pytest.mark.parametrize("how", ["path", "module"])
+def test_a_script_without_a_main_guard_runs_its_campaign(tmp_path: Path, how: str) -> None:
+    """The README's snippet as a plain script (``python camp.py``, or ``python -m camp``):
+    the pool's workers must not run it again (before, each started the campaign anew and
+    failed on the store's lock, and the pool broke)."""
+    store = tmp_path / "store"
+    (tmp_path / "camp.py").write_text(textwrap.dedent(UNGUARDED_RUN))
+    start = [str(tmp_path / "camp.py")] if how == "path" else ["-m", "camp"]
+    out = subprocess.run([sys.executable, *start, str(store)], cwd=tmp_path, timeout=120,
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines() == ["the script runs", "done"]  # its body ran once
+    assert read_manifest(store)["counts"] == {"done": 1, "failed": 0, "pending": 0}
+    (result,) = campaign(store, (0.71,)).results()
+    assert result.status == "done" and result.record is not None and len(result.record) == 30
+
+
+def reads_to_eof(fd: int, seconds: float) -> bool:
+    """True when the pipe ``fd`` reaches end of file (every writer closed it) in time."""
+    deadline = time.monotonic() + seconds
+    while (left := deadline - time.monotonic()) > 0:
+        if select.select([fd], [], [], left)[0] and not os.read(fd, 65536):
+            return True
+    return False
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+def test_workers_end_with_a_killed_campaign(tmp_path: Path, sig: int) -> None:
+    """The campaign process alone is killed while its worker runs the second of three cases:
+    the worker must end at once, multiprocessing's resource tracker with it, and nothing may
+    keep the campaign's stdout open (before, the worker finished its cases and then waited on
+    its queue for ever)."""
+    store = tmp_path / "store"
+    script = tmp_path / "run.py"
+    script.write_text(textwrap.dedent(KILLED_RUN))
+    proc = subprocess.Popen([sys.executable, str(script), str(store)], start_new_session=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    assert proc.stdout is not None
+    deadline = time.monotonic() + 120.0
+    try:
+        while not list((store / "cases").glob("*.npz")):
+            assert proc.poll() is None and time.monotonic() < deadline
+            time.sleep(0.01)
+        os.kill(proc.pid, sig)  # the campaign only, not its process group
+        assert proc.wait(timeout=30.0) == -sig
+        assert reads_to_eof(proc.stdout.fileno(), 30.0), "a process still holds the stdout"
+        deadline = time.monotonic() + 30.0
+        while live_processes(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert live_processes(proc.pid) == []
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.stdout.close()
+    assert unreadable_cases(store) == []  # every file the campaign wrote is whole
+    finished = [r for r in campaign(store).results() if r.status == "done"]
+    assert 1 <= len(finished) < 3
+
+
 # -- (b) dask against local processes ----------------------------------------------------------
 
 
@@ -309,7 +386,60 @@ def test_results_before_running_and_a_damaged_file_are_pending(tmp_path: Path) -
     assert not (tmp_path / "store").exists()  # nothing is written before run()
     camp.case_file(0).parent.mkdir(parents=True)
     camp.case_file(0).write_bytes(b"PK\x03\x04 not a whole file")
-    assert camp.results()[0].status == "pending"
+    damaged = camp.results()[0]
+    assert damaged.status == "pending"  # the next run computes it again
+    assert damaged.error == (f"unreadable case file cases/{camp.hashes[0]}.npz: not a valid "
+                             "case file (BadZipFile: File is not a zip file)")
+
+
+def test_a_case_file_with_nan_torque_is_computed_again(tmp_path: Path) -> None:
+    """A finished case's file whose torque holds a NaN counted as done for the run (never
+    computed again) but as pending for the results; now it is unreadable, and a rerun
+    computes it. Cases answered with synthetic records (tests/synthetic_campaign.py)."""
+    from .synthetic_campaign import SyntheticExecutor, synthetic_store
+
+    store = tmp_path / "store"
+    scenes = ms.presets.paper_cases("ceramic", 0.71, [1, 2], scale="tiny")
+    first = synthetic_store(store, scenes)
+    path = store / "cases" / f"{first[1].hash}.npz"
+    with np.load(path) as npz:
+        arrays = {name: npz[name] for name in npz.files}
+    arrays["torque_Nm"] = np.where(np.arange(arrays["torque_Nm"].size) == 3, np.nan,
+                                   arrays["torque_Nm"])
+    path.unlink()
+    np.savez(path, **arrays)
+    (bad,) = unreadable_cases(store)
+    assert bad.file == f"cases/{path.name}" and "torque_Nm[3] = nan is not finite" in bad.reason
+    camp = ms.Campaign(scenes, store, duration=14.0, block=(4.0, 14.0))
+    assert [r.status for r in camp.results()] == ["done", "pending"]
+    executor = SyntheticExecutor()
+    again = camp.run(executor=executor, progress=False)
+    assert executor.submitted == 1
+    assert [r.status for r in again] == ["done", "done"]
+    assert again[1].energy == first[1].energy  # the same synthetic record as before
+    assert unreadable_cases(store) == []
+
+
+def test_a_damaged_failure_record_is_unreadable_unless_the_case_finished(tmp_path: Path
+                                                                         ) -> None:
+    """A failed case's JSON cut short is listed with its reason (and its case is pending with
+    that reason); beside a whole finished file of the same case it does not matter."""
+    from .synthetic_campaign import synthetic_store
+
+    store = tmp_path / "store"
+    scenes = ms.presets.paper_cases("ceramic", 0.71, [1, 2], scale="tiny")
+    done, failed = synthetic_store(store, scenes, fail=["LDMS#2"])
+    failure = store / "cases" / f"{failed.hash}.failed.json"
+    whole = failure.read_text()
+    failure.write_text(whole[:40])
+    (bad,) = unreadable_cases(store)
+    assert (bad.file, bad.name) == (f"cases/{failure.name}", "LDMS#2 seed 0")
+    assert bad.reason.startswith("not valid JSON (Expecting ")
+    result = ms.Campaign(scenes, store, duration=14.0).results()[1]
+    assert result.status == "pending" and result.error is not None and bad.reason in result.error
+    (store / "cases" / f"{done.hash}.failed.json").write_text(whole[:40])  # beside a whole npz
+    failure.write_text(whole)
+    assert unreadable_cases(store) == []
 
 
 def test_a_store_in_use_is_refused(tmp_path: Path) -> None:

@@ -7,10 +7,15 @@ import contextlib
 import io
 import json
 import re
+import shutil
+import zipfile
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 import millscope as ms
+from millscope.campaign import read_manifest, unreadable_cases
 from millscope.campaign_analysis import analyze_campaign, table6_markdown
 from millscope.cli import main
 from millscope.fit import NoIntervalWarning
@@ -119,3 +124,102 @@ def test_cli_report_bad_input(store, tmp_path, capsys) -> None:
         err = capsys.readouterr().err
         assert err.startswith("millscope: error: ") and message in err
         assert err.count("\n") == 1
+
+
+# -- a store with a damaged case file ----------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def whole_store(tmp_path_factory):
+    """LDMS at levels 1-3, one seed: three finished cases."""
+    path = tmp_path_factory.mktemp("whole") / "store"
+    results = synthetic_store(path, ms.presets.paper_cases("ceramic", 0.71, [1, 2, 3],
+                                                           scale="tiny"))
+    assert [r.status for r in results] == ["done"] * 3
+    return path
+
+
+def _rewrite(path: Path, **arrays: np.ndarray) -> None:
+    path.unlink()
+    with open(path, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def _damage(path: Path, kind: str) -> None:
+    data = path.read_bytes()
+    if kind == "truncated":
+        path.write_bytes(data[: len(data) // 2])
+    elif kind == "flipped":  # one byte in the middle of the samples
+        flipped = bytearray(data)
+        flipped[len(data) // 2] ^= 0xFF
+        path.write_bytes(bytes(flipped))
+    elif kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "directory":
+        path.unlink()
+        path.mkdir()
+    elif kind == "missing":
+        path.unlink()
+    elif kind == "huge header":  # the torque's header claims 10**11 values
+        with zipfile.ZipFile(path) as archive:
+            members = {name: archive.read(name) for name in archive.namelist()}
+        header = io.BytesIO()
+        np.lib.format.write_array_header_1_0(
+            header, {"descr": "<f8", "fortran_order": False, "shape": (10**11,)})
+        members["torque_Nm.npy"] = header.getvalue() + bytes(80)
+        with zipfile.ZipFile(path, "w") as archive:
+            for name, content in members.items():
+                archive.writestr(name, content)
+    else:
+        with np.load(path) as npz:
+            arrays = {name: npz[name] for name in npz.files}
+        if kind == "no meta":
+            del arrays["meta_json"]
+        elif kind == "nan torque":
+            arrays["torque_Nm"] = arrays["torque_Nm"].copy()
+            arrays["torque_Nm"][7] = np.nan
+        _rewrite(path, **arrays)
+
+
+DAMAGE = {  # kind: what the reason must say
+    "truncated": "BadZipFile", "flipped": "CRC", "empty": "an empty file",
+    "directory": "a directory", "no meta": "no meta_json", "nan torque": "not finite",
+    "missing": "missing, although manifest.json lists the case as done",
+    "huge header": "torque_Nm.npy declares 100000000000 values of float64"}
+
+
+@pytest.mark.parametrize("kind", list(DAMAGE))
+def test_report_names_a_case_file_it_cannot_read_and_fails(whole_store, tmp_path, kind,
+                                                          capsys, monkeypatch) -> None:
+    """The report of the readable cases is written, lists the damaged one with the reason,
+    and the command exits 2 with one line naming it (before: exit 0, the case left out of
+    the counts, or a NaN case shown as pending). Figures are stubbed (not drawn)."""
+    monkeypatch.setattr("millscope.plots.save_figure", lambda fig, path: None)
+    store = tmp_path / "store"
+    shutil.copytree(whole_store, store)
+    entries = read_manifest(store)["cases"]
+    assert [e["status"] for e in entries] == ["done"] * 3
+    bad = entries[1]
+    file = f"cases/{bad['hash']}.npz"
+    _damage(store / file, kind)
+
+    out = tmp_path / "report"
+    assert main(["report", str(store), "--out", str(out), "--no-progress",
+                 "--bootstrap", "50"]) == 2
+    printed = capsys.readouterr()
+    assert printed.out == f"wrote {out / 'report.md'}\n"
+    assert printed.err.count("\n") == 1
+    assert printed.err.startswith("millscope: error: 1 case file could not be read")
+    assert f"{file} ({bad['name']} seed 0): " in printed.err and DAMAGE[kind] in printed.err
+
+    text = (out / "report.md").read_text()
+    assert "3 cases, 2 done, 0 failed, **1 could not be read**" in text
+    section = text.split("## Unreadable case files")[1]
+    assert f"- `{file}` ({bad['name']} seed 0): " in section and DAMAGE[kind] in section
+    cases = text.split("## Cases")[1].split("## Unreadable")[0]
+    assert [e["hash"][:12] in cases for e in entries] == [True, False, True]
+
+    (found,) = unreadable_cases(store)
+    assert (found.file, found.hash, found.name) == (file, bad["hash"], f"{bad['name']} seed 0")
+    camp = ms.Campaign.from_store(store)
+    assert bad["hash"] not in camp.hashes and len(camp) == 2

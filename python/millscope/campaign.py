@@ -21,8 +21,11 @@ Every file is written atomically (a temporary file, then a rename), and only the
 called :meth:`Campaign.run` writes: workers return their record, so a dask cluster needs no
 shared file system. The files are the truth; the manifest is rebuilt from them at every start,
 so a campaign killed at any point resumes where it stopped and keeps every case whose file was
-written. A rerun skips finished cases and retries failed ones; a case that raises is recorded
-as failed and the others go on. Ctrl-C stops the campaign, keeping what has finished.
+written; a case file that cannot be read (:func:`unreadable_cases` says why) is computed again.
+The local pool's workers do not run the caller's main module (no ``__main__`` guard needed)
+and end when the campaign process ends, even when it is killed. A rerun skips finished cases
+and retries failed ones; a case that raises is recorded as failed and the others go on. Ctrl-C
+stops the campaign, keeping what has finished.
 
 Typical use (DESIGN.md section 5)::
 
@@ -42,11 +45,17 @@ import dataclasses
 import hashlib
 import json
 import math
+import multiprocessing
+import multiprocessing.context
+import multiprocessing.process
 import os
 import signal
 import socket
+import sys
+import threading
 import time
 import traceback
+import types
 import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -61,7 +70,7 @@ from ._files import atomic_write, read_json
 from .analysis import AnalysisSettings, analyze_block
 from .contact import DEFAULT_DT_FRACTION, MAX_DT_FRACTION
 from .presets import paper_cases
-from .record import RecordError, TorqueRecord
+from .record import TorqueRecord
 from .scene import Scene, _choice, _fail, _positive, _real
 from .simulation import Simulation, _available_cores
 from .spectral import spectral_energy
@@ -75,8 +84,10 @@ __all__ = [
     "RunSettings",
     "case_matrix",
     "paper_matrix",
+    "UnreadableCase",
     "read_manifest",
     "run_case",
+    "unreadable_cases",
 ]
 
 CASE_FORMAT = "millscope-case-1"  # part of every case hash: bump it when results change meaning
@@ -87,6 +98,8 @@ _TRACEBACK_FRAMES = 12  # frames kept in a failed case's traceback summary (the 
 _TRACEBACK_CHARS = 8000
 _TERMINATE_WAIT_S = 10.0  # how long to wait for a terminated worker process to end, s
 _TICK_S = 5.0  # the progress bar is redrawn this often while no case finishes, s
+_ORPHAN_EXIT_CODE = 70  # a worker's exit status when it ends because its campaign died
+_MAIN_SWAP_LOCK = threading.Lock()  # one worker launch at a time hides __main__
 
 Status = Literal["done", "failed", "pending"]
 
@@ -349,7 +362,9 @@ class CaseResult:
     wall_time_s : float
         Wall-clock time the case took in its worker, s (nan when pending).
     error, traceback : str or None
-        Why a failed case failed: ``"Type: message"`` and a summary of the traceback.
+        Why a failed case failed: ``"Type: message"`` and a summary of the traceback. For a
+        pending case whose file cannot be read, ``error`` says why (the next run computes
+        the case again).
     mean_torque : float
         Mean drive torque over the campaign's block, N m (nan without a record or a block).
     lth_hz, lth_amplitude : float
@@ -404,10 +419,11 @@ class CaseResult:
         if lifters is not None:
             a = analyze_block(blk, lifters=lifters.count, rotation_hz=case.scene.rotation_hz,
                               bandwidth=analysis.bandwidth, window=window)
-            values = {"mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
-                      "lth_amplitude": a.lth.amplitude, "lth_snr": a.lth.snr,
-                      "lth_distinct": a.lth.distinct, "energy": a.energy.energy,
-                      "energy_relative_std": a.energy.relative_std}
+            values: dict[str, Any] = {
+                "mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
+                "lth_amplitude": a.lth.amplitude, "lth_snr": a.lth.snr,
+                "lth_distinct": a.lth.distinct, "energy": a.energy.energy,
+                "energy_relative_std": a.energy.relative_std}
         else:
             e = spectral_energy(blk, ["mean"], bandwidth=analysis.bandwidth, window=window)
             values = {"mean_torque": blk.mean_torque_Nm, "energy": e.energy,
@@ -436,49 +452,230 @@ def _failure_path(store: Path, digest: str) -> Path:
     return store / "cases" / f"{digest}.failed.json"
 
 
-def _read_done(path: Path) -> dict[str, Any] | None:
-    """The ``meta["campaign"]`` of a finished case's file, or None when the file is not a
-    whole, consistent case file: readable samples (the zip's checksums hold) and a stored case
-    that hashes to the file's name."""
+class _Unreadable(Exception):
+    """Why a case file cannot be read (one line)."""
+
+
+def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
+    """The ``meta["campaign"]`` and the record of a finished case's file.
+
+    Raises :class:`_Unreadable` saying why unless the file is a whole, consistent case file:
+    a zip whose checksums hold, the three arrays of record.py's format, samples a
+    :class:`~millscope.record.TorqueRecord` accepts (finite, uniform), a stored case that
+    hashes to the file's name and the number of samples its settings give.
+    """
     try:
+        if path.is_dir():
+            raise _Unreadable("a directory, not a case file")
+        if path.stat().st_size == 0:
+            raise _Unreadable("an empty file")
         with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
+            missing = [name for name in ("time_s", "torque_Nm", "meta_json")
+                       if name not in data.files]
+            if missing:
+                raise _Unreadable(f"no {' or '.join(missing)} in the file")
+            for name in ("time_s", "torque_Nm", "meta_json"):
+                _check_declared_size(data.zip, f"{name}.npy")
+            arrays = {name: data[name] for name in ("time_s", "torque_Nm")}
             meta = json.loads(str(data["meta_json"]))
-            if data["time_s"].shape != data["torque_Nm"].shape:
-                return None
-        info = meta["campaign"]
-        if Case.from_dict(info["case"]).hash() != path.stem:
-            return None
-    except (OSError, KeyError, TypeError, ValueError, EOFError, zipfile.BadZipFile):
+        for name, values in arrays.items():
+            if values.dtype.kind not in "fiu":
+                raise _Unreadable(f"{name} holds {values.dtype} values, not real numbers")
+        if not isinstance(meta, dict) or not isinstance(meta.get("campaign"), dict):
+            raise _Unreadable('its meta holds no "campaign" mapping')
+        info: dict[str, Any] = meta["campaign"]
+        record = TorqueRecord(arrays["time_s"], arrays["torque_Nm"], meta)
+        case = Case.from_dict(info.get("case"))  # type: ignore[arg-type]
+    except _Unreadable:
+        raise
+    except (OSError, KeyError, TypeError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise _Unreadable(f"not a valid case file ({_one_line(exc)})") from None
+    if case.hash() != path.stem:
+        raise _Unreadable(f"it holds case {case.hash()[:12]}, not the one its name says")
+    expected = case.settings.total_samples - case.settings.warm_up_samples
+    if len(record) != expected:
+        raise _Unreadable(f"it holds {len(record)} samples; its case gives {expected}")
+    return info, record
+
+
+def _check_declared_size(archive: zipfile.ZipFile, member: str) -> None:
+    """Raises :class:`_Unreadable` when the ``.npy`` header of ``member`` declares more values
+    than the member holds, before numpy would allocate them."""
+    with archive.open(member) as fh:
+        version = np.lib.format.read_magic(fh)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+        else:
+            raise _Unreadable(f"{member} has .npy format {version}, not 1.0 or 2.0")
+    needed = math.prod(shape) * dtype.itemsize
+    if needed > archive.getinfo(member).file_size:
+        raise _Unreadable(f"{member} declares {math.prod(shape)} values of {dtype} "
+                          f"({needed} bytes) but holds {archive.getinfo(member).file_size} bytes")
+
+
+def _open_failed(path: Path) -> dict[str, Any]:
+    """The content of a failed case's file; :class:`_Unreadable` saying why when it is not a
+    whole failure record of the case its name says."""
+    try:
+        if path.is_dir():
+            raise _Unreadable("a directory, not a case file")
+        try:
+            info = read_json(path, "failed case")
+        except ValueError as exc:  # the message starts with the path, which the caller names
+            raise _Unreadable(str(exc).removeprefix(f"{path}: ")) from None
+        if not isinstance(info, dict):
+            raise _Unreadable(f"holds a JSON {type(info).__name__}, not a failed case")
+        digest = Case.from_dict(info.get("case")).hash()  # type: ignore[arg-type]
+    except _Unreadable:
+        raise
+    except (OSError, KeyError, TypeError, ValueError, RecursionError) as exc:
+        raise _Unreadable(f"not a valid failed-case file ({_one_line(exc)})") from None
+    if digest != path.name.split(".")[0]:
+        raise _Unreadable(f"it holds case {digest[:12]}, not the one its name says")
+    return info
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _read_done(path: Path) -> dict[str, Any] | None:
+    """:func:`_open_done`'s info, or None when the file cannot be read."""
+    try:
+        return _open_done(path)[0]
+    except _Unreadable:
         return None
-    return info if isinstance(info, dict) else None
 
 
 def _read_failed(path: Path) -> dict[str, Any] | None:
+    """:func:`_open_failed`'s info, or None when the file cannot be read."""
     try:
-        info = read_json(path, "failed case")
-        if Case.from_dict(info["case"]).hash() != path.name.split(".")[0]:
-            return None
-    except (KeyError, TypeError, ValueError):
+        return _open_failed(path)
+    except _Unreadable:
         return None
-    return info if isinstance(info, dict) else None
+
+
+def _case_files(store: Path) -> Iterator[tuple[Status, Path]]:
+    """Every case file in ``store/cases`` (not the temporaries of unfinished writes):
+    failures first, so that a finished case's file wins over a failure of the same case."""
+    folder = store / "cases"
+    if folder.is_dir():
+        for status, pattern in (("failed", "*.failed.json"), ("done", "*.npz")):
+            for path in sorted(folder.glob(pattern)):
+                if not path.name.startswith("."):
+                    yield status, path  # type: ignore[misc]
 
 
 def _stored(store: Path) -> dict[str, tuple[Status, Path, dict[str, Any]]]:
     """Every whole case file in ``store`` by hash: (status, path, its case info); a finished
     case's file wins over a failure of the same case."""
     found: dict[str, tuple[Status, Path, dict[str, Any]]] = {}
-    folder = store / "cases"
-    if not folder.is_dir():
-        return found
-    for path in sorted(folder.glob("*.failed.json")):
-        info = _read_failed(path)
+    for status, path in _case_files(store):
+        info = _read_done(path) if status == "done" else _read_failed(path)
         if info is not None:
-            found[path.name.split(".")[0]] = ("failed", path, info)
-    for path in sorted(folder.glob("*.npz")):
-        info = _read_done(path)
-        if info is not None:
-            found[path.stem] = ("done", path, info)
+            found[path.name.split(".")[0]] = (status, path, info)
     return found
+
+
+@dataclass(frozen=True)
+class UnreadableCase:
+    """A case a store should hold but cannot give: its file is damaged, or missing although
+    the manifest lists the case as finished or failed.
+
+    Attributes
+    ----------
+    file : str
+        The case file, relative to the store (``cases/<hash>.npz`` or
+        ``cases/<hash>.failed.json``).
+    hash : str
+        The case's hash, from the file's name.
+    name : str or None
+        ``"<scene> seed <seed>"`` as the manifest lists the case; None when it does not.
+    reason : str
+        Why the file cannot be read (one line).
+    """
+
+    file: str
+    hash: str
+    name: str | None
+    reason: str
+
+    def __str__(self) -> str:
+        named = f" ({self.name})" if self.name else ""
+        return f"{self.file}{named}: {self.reason}"
+
+
+def _listing(cases: list[UnreadableCase], most: int = 5) -> str:
+    """The first ``most`` unreadable cases on one line, then how many more."""
+    text = "; ".join(str(c) for c in cases[:most])
+    return text + (f"; and {len(cases) - most} more" if len(cases) > most else "")
+
+
+def unreadable_cases(store: str | os.PathLike[str]) -> list[UnreadableCase]:
+    """Every case of ``store`` whose file cannot be read, with the reason.
+
+    A case file (``cases/*.npz``, ``cases/*.failed.json``) that is not whole and consistent
+    (truncated, altered, empty, a directory, without its meta, with samples a
+    :class:`~millscope.record.TorqueRecord` refuses, or named for another case), and a case
+    the manifest lists as done or failed whose file is missing. Temporary files of writes a
+    killed campaign left are not cases (the next run removes them). A finished case's file
+    wins over a failure of the same case, so a readable ``.npz`` hides a damaged
+    ``.failed.json`` beside it.
+
+    Parameters
+    ----------
+    store : str or path
+        A campaign store directory.
+
+    Returns
+    -------
+    list of UnreadableCase
+        In file-name order; empty for a store whose every case can be read.
+
+    Raises
+    ------
+    ValueError
+        when ``store`` is not a directory or its manifest is damaged.
+    """
+    path = Path(store)
+    if not path.is_dir():
+        raise _fail("store", str(store), "an existing campaign store directory")
+    listed: dict[str, dict[str, Any]] = {}
+    if (path / "manifest.json").exists():
+        listed = {e["hash"]: e for e in read_manifest(path).get("cases", [])
+                  if isinstance(e, dict) and isinstance(e.get("hash"), str)}
+
+    def name(digest: str) -> str | None:
+        entry = listed.get(digest)
+        if entry is None or not isinstance(entry.get("name"), str):
+            return None
+        return f"{entry['name'] or 'scene'} seed {entry.get('seed')}"
+
+    found: dict[str, UnreadableCase] = {}
+    readable: set[str] = set()
+    for status, file in _case_files(path):
+        digest = file.name.split(".")[0]
+        try:
+            _open_done(file) if status == "done" else _open_failed(file)
+        except _Unreadable as exc:
+            found[file.name] = UnreadableCase(file.relative_to(path).as_posix(), digest,
+                                              name(digest), str(exc))
+        else:
+            readable.add(digest)
+    for digest in readable:  # a whole finished case outweighs a damaged failure record
+        found.pop(_failure_path(path, digest).name, None)
+    for digest, entry in listed.items():
+        said = entry.get("status")
+        if said in ("done", "failed") and digest not in readable:
+            file = (_case_path if said == "done" else _failure_path)(path, digest)
+            if not file.exists() and not file.is_symlink():
+                found[file.name] = UnreadableCase(
+                    file.relative_to(path).as_posix(), digest, name(digest),
+                    f"missing, although manifest.json lists the case as {said}")
+    return [found[k] for k in sorted(found)]
 
 
 def _scan(store: Path) -> dict[str, dict[str, Any]]:
@@ -563,10 +760,52 @@ def _remove_temporaries(store: Path) -> None:
 # -- the worker side ---------------------------------------------------------------------------
 
 
-def _ignore_sigint() -> None:
-    """Pool initializer: idle workers ignore Ctrl-C (the campaign handles it); a running
-    simulation still stops on it, and its case is then reported as failed."""
+def _start_worker() -> None:
+    """Pool initializer: idle workers ignore Ctrl-C (the campaign handles it; a running
+    simulation still stops on it, and its case is then reported as failed), and a watchdog
+    thread ends the worker as soon as the campaign process is gone (killed by SIGKILL or
+    SIGTERM): its case would be lost anyway, and an orphaned worker would otherwise wait on its
+    queue for ever, holding the caller's stdout and multiprocessing's resource tracker."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    parent = multiprocessing.parent_process()
+    if parent is not None:
+        threading.Thread(target=_exit_with, args=(parent,), name="millscope-orphan-watchdog",
+                         daemon=True).start()
+
+
+def _exit_with(parent: multiprocessing.process.BaseProcess) -> None:
+    """Waits for ``parent`` to end, then ends this process at once. The wait is on the
+    parent's sentinel (a pipe that reads end-of-file when the parent dies, or its process
+    handle on Windows), so it costs nothing while the parent lives."""
+    parent.join()
+    os._exit(_ORPHAN_EXIT_CODE)
+
+
+class _WorkerProcess(multiprocessing.context.SpawnProcess):
+    """A spawned process that does not run the caller's main module.
+
+    ``spawn`` (and ``forkserver``) children import the parent's ``__main__`` (a script by its
+    path, ``python -m`` by its name) so that functions defined there can be unpickled; a script
+    without an ``if __name__ == "__main__":`` guard then starts its campaign again in every
+    worker. A campaign's workers need nothing from ``__main__`` (they call :func:`run_case` with
+    a plain dict), so while this process is launched ``__main__`` is a bare module and the child
+    is told of no main module, as when started from a notebook or the REPL."""
+
+    @staticmethod
+    def _Popen(process_obj: Any) -> Any:  # multiprocessing's hook, called by start()
+        with _MAIN_SWAP_LOCK:
+            main = sys.modules["__main__"]
+            sys.modules["__main__"] = types.ModuleType("__main__")
+            try:
+                return multiprocessing.context.SpawnProcess._Popen(process_obj)
+            finally:
+                sys.modules["__main__"] = main
+
+
+class _WorkerContext(multiprocessing.context.SpawnContext):
+    """The ``spawn`` context with :class:`_WorkerProcess` processes: the local pool's."""
+
+    Process = _WorkerProcess
 
 
 def _traceback_summary(exc: BaseException) -> str:
@@ -774,6 +1013,10 @@ class Campaign:
             raise _fail("store", str(store), "an existing campaign store directory")
         stored = _stored(path)
         if not stored:
+            damaged = unreadable_cases(path)
+            if damaged:
+                raise ValueError(f"store {path} holds no readable case file; {len(damaged)} "
+                                 f"cannot be read: {_listing(damaged)}")
             raise ValueError(f"store {path} holds no case file (cases/<hash>.npz or "
                              "cases/<hash>.failed.json); run a Campaign into it first")
         order: list[str] = []
@@ -781,7 +1024,8 @@ class Campaign:
                                         "window": "hann"}
         if (path / "manifest.json").is_file():
             manifest = read_manifest(path)
-            order = [e.get("hash") for e in manifest.get("cases", []) if isinstance(e, dict)]
+            order = [e["hash"] for e in manifest.get("cases", [])
+                     if isinstance(e, dict) and isinstance(e.get("hash"), str)]
             if "analysis" in manifest:
                 saved = manifest["analysis"]
                 if saved is not None:
@@ -868,6 +1112,9 @@ class Campaign:
         ----------
         executor : None, concurrent.futures.Executor or dask.distributed.Client
             None: a local process pool (spawned processes) of ``max_workers`` processes.
+            Its workers do not import the caller's main module, so a script or notebook needs
+            no ``if __name__ == "__main__":`` guard; they end as soon as this process ends,
+            even when it is killed.
             Anything with ``submit(fn, *args)`` returning futures works; for a dask Client,
             ``distributed.as_completed`` collects them. Its workers must import millscope;
             with threads per case > 1, give each worker process that many cores.
@@ -935,7 +1182,7 @@ class Campaign:
         the store holds."""
         entries: dict[str, dict[str, Any]] = {}
         for c, digest in zip(self._cases, self._hashes, strict=True):
-            entries[digest] = on_disk.pop(digest, None) or {
+            entries[digest] = on_disk.pop(digest, {}) or {
                 "hash": digest, "name": c.scene.name, "seed": c.settings.seed,
                 "status": "pending", "file": None, "wall_time_s": None, "error": None,
                 "traceback": None}
@@ -946,14 +1193,13 @@ class Campaign:
                  max_workers: int | None, cores: int, progress: bool) -> None:
         pool = None
         if executor is None:
-            import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
 
             threads = max(self._cases[k].settings.threads for k in todo)
             workers = max_workers or max(1, cores // threads)
             pool = ProcessPoolExecutor(max_workers=min(workers, len(todo)),
-                                       mp_context=multiprocessing.get_context("spawn"),
-                                       initializer=_ignore_sigint)
+                                       mp_context=_WorkerContext(),
+                                       initializer=_start_worker)
             executor = pool
         futures: dict[Any, int] = {}
         done_before = sum(1 for d in self._hashes if entries[d]["status"] == "done")
@@ -1020,30 +1266,39 @@ class Campaign:
         Returns
         -------
         list of CaseResult
-            In the order of :attr:`cases`; "pending" for cases never run.
+            In the order of :attr:`cases`; "pending" for cases never run, and for cases whose
+            file cannot be read (:func:`unreadable_cases`): their ``error`` says why, and the
+            next :meth:`run` computes them again.
         """
         out = []
         for case, digest in zip(self._cases, self._hashes, strict=True):
+            problems = []
             path = _case_path(self._store, digest)
-            info = _read_done(path) if path.is_file() else None
-            if info is not None:
+            if path.exists():
                 try:
-                    record = TorqueRecord.load(path)
-                except RecordError:
-                    record = None
-                if record is not None:
+                    info, record = _open_done(path)
+                except _Unreadable as exc:
+                    problems.append(f"{path.relative_to(self._store).as_posix()}: {exc}")
+                else:
                     out.append(CaseResult.from_record(
                         case, record, self._analysis,
                         wall_time_s=_number(info.get("wall_time_s"))))
                     continue
             failure = _failure_path(self._store, digest)
-            info = _read_failed(failure) if failure.is_file() else None
-            if info is not None:
-                out.append(CaseResult(case, digest, "failed",
-                                      wall_time_s=_number(info.get("wall_time_s")),
-                                      error=info.get("error"), traceback=info.get("traceback")))
-            else:
-                out.append(CaseResult(case, digest, "pending"))
+            if failure.exists():
+                try:
+                    info = _open_failed(failure)
+                except _Unreadable as exc:
+                    problems.append(f"{failure.relative_to(self._store).as_posix()}: {exc}")
+                else:
+                    out.append(CaseResult(case, digest, "failed",
+                                          wall_time_s=_number(info.get("wall_time_s")),
+                                          error=info.get("error"),
+                                          traceback=info.get("traceback")))
+                    continue
+            out.append(CaseResult(case, digest, "pending",
+                                  error=("unreadable case file " + "; ".join(problems)
+                                         if problems else None)))
         return out
 
 

@@ -163,12 +163,17 @@ def cmd_monitor(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    """The report of a campaign store."""
-    from .report import write_report
+    """The report of a campaign store; exit code 2 with one error line naming the case files
+    it could not read, after writing the report of the others."""
+    from .report import UnreadableCasesError, write_report
 
-    path = write_report(args.store, args.out, progress=not args.no_progress,
-                        block=None if args.block is None else tuple(args.block),
-                        bootstrap=args.bootstrap)
+    try:
+        path = write_report(args.store, args.out, progress=not args.no_progress,
+                            block=None if args.block is None else tuple(args.block),
+                            bootstrap=args.bootstrap)
+    except UnreadableCasesError as exc:
+        print(f"wrote {exc.report}")
+        raise
     print(f"wrote {path}")
     return 0
 
@@ -379,7 +384,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",
                        description="Analyses a campaign store (paper section 6) and writes "
                                    "report.md with the Table 6 analogue, per-group and per-case "
-                                   "tables, Figs. 9-15 as PNG and a calibration per group.")
+                                   "tables, Figs. 9-15 as PNG and a calibration per group. "
+                                   "Case files it cannot read are listed in the report, and "
+                                   "it then exits with code 2 naming them.")
     p.add_argument("store", help="campaign store directory")
     p.add_argument("--out", default=None, help="output folder (default STORE/report)")
     p.add_argument("--block", type=float, nargs=2, metavar=("T1", "T2"), default=None,

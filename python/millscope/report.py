@@ -33,15 +33,34 @@ from tqdm.auto import tqdm
 
 from . import _core, plots
 from ._files import atomic_write
-from .campaign import Campaign, CaseResult
+from .campaign import Campaign, CaseResult, UnreadableCase, _listing, unreadable_cases
 from .campaign_analysis import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
 from .fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from .presets import case_key
 from .spectral import PEAK_DISTINCT_RATIO, spectrum
 
-__all__ = ["calibration_file_name", "write_report"]
+__all__ = ["UnreadableCasesError", "calibration_file_name", "write_report"]
 
 REPORT_NAME = "report.md"
+
+
+class UnreadableCasesError(ValueError):
+    """Some case files of the store could not be read; raised by :func:`write_report` after
+    it wrote the report of the cases it could read.
+
+    Attributes
+    ----------
+    report : Path
+        The written ``report.md`` (its "Unreadable case files" section lists the cases).
+    cases : list of UnreadableCase
+        Every case that could not be read, with the reason.
+    """
+
+    def __init__(self, report: Path, cases: list[UnreadableCase]) -> None:
+        self.report = report
+        self.cases = cases
+        super().__init__(f"{len(cases)} case file{'s' if len(cases) > 1 else ''} could not be "
+                         f"read, so the report at {report} leaves them out: {_listing(cases)}")
 
 
 def _slug(name: str) -> str:
@@ -212,16 +231,23 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
     ValueError
         before anything is written: for a path that is not a campaign store, a store without
         a finished case, or a bad argument.
+    UnreadableCasesError
+        (a ValueError) after the report of the other cases is written, when case files of
+        the store cannot be read (:func:`~millscope.campaign.unreadable_cases`): damaged, or
+        missing although the manifest lists their case. The report counts and names them too.
     """
     if isinstance(sections, str) or not all(isinstance(text, str) for text in sections):
         raise ValueError(f"sections = {sections!r} is not valid; it must be a sequence of "
                          "Markdown strings")
     campaign = Campaign.from_store(store, block=block)
+    unreadable = unreadable_cases(campaign.store)
     results = campaign.results()
     done = [r for r in results if r.status == "done"]
     if not done:
+        damaged = (f"; {len(unreadable)} cannot be read: {_listing(unreadable)}"
+                   if unreadable else "")
         raise ValueError(f"store {campaign.store} holds no finished case ({len(results)} "
-                         "failed); nothing to report")
+                         f"failed{damaged}); nothing to report")
     if campaign.analysis is None:
         raise ValueError(f"store {campaign.store} does not say which block to analyse (its "
                          "campaign ran with block=None); pass block=(t1, t2)")
@@ -246,12 +272,14 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
     settings = campaign.analysis
     t1, t2 = settings.block
     counts = {s: sum(r.status == s for r in results) for s in ("done", "failed", "pending")}
+    cases = len({r.hash for r in results} | {c.hash for c in unreadable})  # each case once
     lines = [
         "# millscope campaign report",
         "",
-        f"Store `{campaign.store}`: {len(results)} cases with files, {counts['done']} done, "
-        f"{counts['failed']} failed. millscope {_core.build_info()['version']}, "
-        f"{time.strftime('%Y-%m-%d %H:%M')}.",
+        f"Store `{campaign.store}`: {cases} cases, {counts['done']} done, {counts['failed']} failed"
+        + (f", **{len(unreadable)} could not be read** (listed under \"Unreadable case "
+           "files\", left out of the rest)" if unreadable else "")
+        + f". millscope {_core.build_info()['version']}, {time.strftime('%Y-%m-%d %H:%M')}.",
         "",
         f"Analysis (paper section 6): block {t1:g} <= t < {t2:g} s (TR = {t2 - t1:g} s, "
         f"df = {1 / (t2 - t1):.3g} Hz), {settings.window} window; the mean and the LTH "
@@ -310,7 +338,17 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
                   f"{(r.error or '').splitlines()[0] if r.error else 'no message'}"
                   for r in failed]
         lines += [""]
+    if unreadable:
+        lines += ["## Unreadable case files", "",
+                  "These cases are in the store but could not be read, so the tables, fits and "
+                  "figures above leave them out. A rerun of the campaign computes them again.",
+                  ""]
+        lines += [f"- `{c.file}`{f' ({c.name})' if c.name else ''}: {c.reason}"
+                  for c in unreadable]
+        lines += [""]
     report = target / REPORT_NAME
     with atomic_write(report, "w") as fh:
         fh.write("\n".join(lines))
+    if unreadable:
+        raise UnreadableCasesError(report, unreadable)
     return report
