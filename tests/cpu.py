@@ -16,3 +16,13 @@ def cpu_flags() -> set[str]:
 def runs_wide_pair_search() -> bool:
     """Whether the engine's AVX-512 pair search (touching_pairs.hpp) can run here."""
     return {"avx512f", "avx512vl"} <= cpu_flags()
+
+
+def usable_cores() -> int:
+    """The cores this process may use (its affinity; the machine's count where there is none)."""
+    import os
+
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import millscope as ms
 from millscope.contact import hertz_max_overlap
+
+from .cpu import usable_cores
 
 
 def quick_sim(seed: int = 0) -> ms.Simulation:
@@ -135,3 +139,35 @@ def test_track_energy_is_kept_by_a_checkpoint(tmp_path) -> None:  # type: ignore
     assert ms.Simulation.load(path, track_energy=True).track_energy is True
     with pytest.raises(ValueError, match=r"track_energy = 'no' is not valid"):
         ms.Simulation(scene, track_energy="no")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("extra", [1, 100000])
+def test_more_threads_than_the_cores_are_refused(tmp_path: Path, extra: int) -> None:
+    """Simulation(threads=100000) crashed the OpenMP runtime and 10000 hung it: counts above
+    the cores this process may use are refused, by the constructor and by load()."""
+    n, too_many = usable_cores(), usable_cores() + extra
+    scene = ms.presets.pilot_mill(0.71, None, scale="tiny")
+    message = (rf"threads = {too_many} is not valid; it must be an integer in \[1, {n}\], the "
+               "cores this process may use")
+    with pytest.raises(ValueError, match=message):
+        ms.Simulation(scene, threads=too_many)
+    path = ms.Simulation(scene, threads=1).save(tmp_path / "empty.npz")
+    with pytest.raises(ValueError, match=message):
+        ms.Simulation.load(path, threads=too_many)
+    assert ms.Simulation(scene, threads=n).threads == n
+
+
+def test_a_checkpoint_of_each_phase_loads(tmp_path: Path) -> None:
+    """The checks of load() accept what save() writes before rotation too: an empty drum, a
+    filled one (nothing has stepped, no neighbour list) and a settled one."""
+    scene = ms.presets.pilot_mill(0.71, None, scale="tiny")
+    sim = ms.Simulation(scene, seed=3, threads=1, settle_tolerance=10.0, settle_min_s=0.02,
+                        settle_max_s=0.04)
+    for phase in ("empty", "filled", "settled"):
+        if phase == "filled":
+            sim.fill()
+        elif phase == "settled":
+            sim.settle(progress=False)
+        again = ms.Simulation.load(sim.save(tmp_path / f"{phase}.npz"))
+        assert again.phase == phase
+        assert np.array_equal(again.positions, sim.positions)
