@@ -1,6 +1,11 @@
-"""What this machine's CPU offers, read from /proc/cpuinfo (Linux), independently of the build."""
+"""What this machine's CPU offers, read from /proc/cpuinfo (Linux), independently of the build,
+and how many cores this process may use."""
 
 from __future__ import annotations
+
+import os
+
+import pytest
 
 
 def cpu_flags() -> set[str]:
@@ -20,9 +25,14 @@ def runs_wide_pair_search() -> bool:
 
 def usable_cores() -> int:
     """The cores this process may use (its affinity; the machine's count where there is none)."""
-    import os
-
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:
         return os.cpu_count() or 1
+
+
+#: For a test whose point is a run on two threads: Simulation refuses more threads than the
+#: process may use, so on one core it is skipped (tests that only need some run use
+#: ``min(2, usable_cores())`` instead).
+needs_two_cores = pytest.mark.skipif(usable_cores() < 2,
+                                     reason="this process may use one core only")

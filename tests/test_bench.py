@@ -19,7 +19,7 @@ import millscope as ms
 from millscope import bench, presets
 from millscope.cli import main
 
-from .cpu import usable_cores
+from .cpu import needs_two_cores, usable_cores
 
 ROOT = Path(__file__).resolve().parents[1]
 SPIN_UP = "0.05"  # s of rotation before timing: enough for a tumbling state at tiny scale
@@ -110,6 +110,7 @@ def test_measure_refuses_a_simulation_at_rest_and_too_few_steps() -> None:
 
 # -- the command line -------------------------------------------------------------------------
 
+@needs_two_cores
 def test_cli_table_ratios_and_final_line_agree(cache: Path, capsys) -> None:
     # few steps: two threads on a busy 2-core machine can be very slow (no timing is checked)
     code = main(_bench(cache, "--scenes", "balls", "frictionless", "--threads", "1", "2",

@@ -10,13 +10,13 @@ import pytest
 import millscope as ms
 from millscope.contact import hertz_max_overlap
 
-from .cpu import usable_cores
+from .cpu import needs_two_cores, usable_cores
 
 
 def quick_sim(seed: int = 0) -> ms.Simulation:
     scene = ms.presets.pilot_mill(0.71, "ceramic", 1, scale="small")
-    return ms.Simulation(scene, seed=seed, threads=2, settle_tolerance=10.0, settle_min_s=0.1,
-                         settle_max_s=0.2)
+    return ms.Simulation(scene, seed=seed, threads=min(2, usable_cores()), settle_tolerance=10.0,
+                         settle_min_s=0.1, settle_max_s=0.2)
 
 
 def hertz_overlap_bound(scene: ms.Scene, speed_fraction: float) -> float:
@@ -58,7 +58,7 @@ def test_checkpoint_continues_bit_for_bit(tmp_path) -> None:  # type: ignore[no-
     path = sim.save(tmp_path / "case.ckpt.npz")
     a = sim.run(0.1, sampling="mean", progress=False)
     again = ms.Simulation.load(path)
-    assert again.phase == "rotating" and again.threads == 2
+    assert again.phase == "rotating" and again.threads == sim.threads
     b = again.run(0.1, sampling="mean", progress=False)
     assert np.array_equal(a.time_s, b.time_s)
     assert np.array_equal(a.torque_Nm, b.torque_Nm)
@@ -81,8 +81,8 @@ def test_trapezoidal_lifters_end_to_end() -> None:
     base = ms.presets.pilot_mill(0.71, "ceramic", 1, scale="small")
     trapezoid = ms.Lifters(16, 0.03, 0.02, profile="trapezoidal", top_width=0.012)
     scene = dataclasses.replace(base, drum=dataclasses.replace(base.drum, lifters=trapezoid))
-    sim = ms.Simulation(scene, seed=0, threads=2, settle_tolerance=10.0, settle_min_s=0.1,
-                        settle_max_s=0.2)
+    sim = ms.Simulation(scene, seed=0, threads=min(2, usable_cores()), settle_tolerance=10.0,
+                        settle_min_s=0.1, settle_max_s=0.2)
     rec = sim.run(0.3, sampling="mean", progress=False)
     assert rec.meta["scene"]["drum"]["lifters"]["top_width"] == 0.012
     assert np.all(sim.last_parts["lifters"][10:] > 0.0)  # lifters push the charge up
@@ -107,7 +107,7 @@ def test_trapezoidal_lifters_end_to_end() -> None:
 
 
 @pytest.mark.parametrize("particles", [None, "ceramic"])
-@pytest.mark.parametrize("threads", [1, 2])
+@pytest.mark.parametrize("threads", [1, pytest.param(2, marks=needs_two_cores)])
 def test_energy_ledger_changes_nothing_in_the_motion(threads: int, particles: str | None) -> None:
     """Without the energy ledger the step sums the same forces in the same order: the torque
     and the positions are the same to the bit, the drive work too; only the losses go NaN.
