@@ -126,6 +126,9 @@ def integer_velocities(arrays: dict[str, np.ndarray]) -> None:
      r"rng_state\['state'\]\['inc'\] = -3 is not valid"),
     (set_meta("engine_scalars", "step", value=2**40), None, r"theta = .* is not valid"),
     (None, set_item("list_partner", 0, 0), r"list_partner holds a partner not after its row"),
+    # found by the family below: recomputing the forces advances the tangential springs twice
+    (set_meta("engine_scalars", "forces_valid", value=False), None,
+     r"forces_valid = False is not valid; it must be true at step \d+"),
 ])
 def test_the_edits_of_the_issue_are_refused(saved: Saved, tmp_path: Path, meta_edit: Any,
                                             array_edit: Any, message: str) -> None:

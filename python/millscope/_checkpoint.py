@@ -240,7 +240,13 @@ def check_scalars(scalars: object, template: Mapping[str, Any], phase: str, scen
                       "since the start of rotation")
     s["theta"] = theta
     s["omega"] = float(s["omega"])
+    # The forces are those of the last step once anything ran (Simulation sets positions only
+    # when filling, at step 0); a run that recomputed them would advance the contacts'
+    # tangential springs twice.
     s["forces_valid"] = boolean("forces_valid", s["forces_valid"])
+    if s["forces_valid"] != (step > 0):
+        raise _refuse("forces_valid", s["forces_valid"],
+                      f"{str(step > 0).lower()} at step {step}")
     s["step"], s["list_builds"] = step, builds
     torque = s["torque"]
     if not isinstance(torque, list) or len(torque) != len(template["torque"]):
