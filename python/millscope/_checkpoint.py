@@ -339,14 +339,15 @@ def _check_list(a: Mapping[str, NDArray[Any]], builds: int, x: NDArray[np.float6
         if start.size or partner.size or history.size:
             raise _refuse("list_builds", 0, ">= 1 with a saved neighbour list")
         return
+    counts = np.diff(start.astype(np.int64)).astype(np.int64)
     if start.size != n + 1 or start[0] != 0 or int(start[-1]) != partner.size \
-            or np.any(np.diff(start.astype(np.int64)) < 0):
+            or np.any(counts < 0):
         raise Refused(f"list_start is not the row starts of {n} particles over "
                       f"{partner.size} partners")
     if history.size != history_size * partner.size:
         raise _refuse("the size of list_history", history.size,
                       f"{history_size} x {partner.size} listed pairs")
-    rows = np.repeat(np.arange(n), np.diff(start.astype(np.int64)))
+    rows = np.repeat(np.arange(n), counts)
     cols = partner.astype(np.int64)
     if np.any(cols <= rows) or np.any(cols >= n):
         raise Refused("list_partner holds a partner not after its row particle or beyond the "
