@@ -19,8 +19,10 @@ other results:
   (every pair within the skin listed, none beyond it, up to the float32 rounding of those
   positions): a list from other radii (a permuted ``order``) or other positions is refused;
 * the counters: step >= 0, list builds >= 0 and none without a list, the rotation's start and
-  the last sample between 0 and the step (or -1 before rotation), the drum's speed that of the
-  scene once rotating (0 before), a known phase consistent with them;
+  the last sample between 0 and the step (or -1 before rotation), the drum's angle omega dt x
+  the steps since the start of rotation (which pins those counters), the drum's speed that of
+  the scene once rotating (0 before), forces valid exactly when a step ran, a known phase
+  consistent with them;
 * meta: the time step within [MIN_DT_FRACTION, MAX_DT_FRACTION] x the scene's smallest
   Rayleigh time, the skin, the seed and the random generator's state well formed.
 
