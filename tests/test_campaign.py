@@ -176,7 +176,8 @@ def test_ctrl_c_stops_at_once_and_keeps_finished_cases(tmp_path: Path) -> None:
 
 def test_b_dask_cluster_gives_the_same_torque_as_local_processes(tmp_path: Path) -> None:
     distributed = pytest.importorskip("distributed")
-    local = campaign(tmp_path / "local", (0.62, 0.80)).run(max_workers=2, progress=False)
+    local = campaign(tmp_path / "local", (0.62, 0.80)).run(
+        max_workers=min(2, _available_cores()), progress=False)
     with distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
