@@ -19,6 +19,8 @@ import millscope as ms
 from millscope import bench, presets
 from millscope.cli import main
 
+from .cpu import needs_two_cores, usable_cores
+
 ROOT = Path(__file__).resolve().parents[1]
 SPIN_UP = "0.05"  # s of rotation before timing: enough for a tumbling state at tiny scale
 FLOAT = r"[-+0-9.eE]+"
@@ -108,6 +110,7 @@ def test_measure_refuses_a_simulation_at_rest_and_too_few_steps() -> None:
 
 # -- the command line -------------------------------------------------------------------------
 
+@needs_two_cores
 def test_cli_table_ratios_and_final_line_agree(cache: Path, capsys) -> None:
     # few steps: two threads on a busy 2-core machine can be very slow (no timing is checked)
     code = main(_bench(cache, "--scenes", "balls", "frictionless", "--threads", "1", "2",
@@ -160,7 +163,11 @@ def test_cli_slice_sizes_report_the_cost_spread(cache: Path, capsys) -> None:
     ("extra", "message"),
     [
         (["--steps", "1"], "--steps: '1' is not valid; it must be >= 2"),
-        (["--threads", "1", "0"], "--threads: '0' is not valid; it must be >= 1"),
+        (["--threads", "1", "0"], "--threads: '0' is not valid; it must be an integer in [1, "),
+        (["--threads", "1", str(usable_cores() + 1)],
+         f"--threads: '{usable_cores() + 1}' is not valid; it must be an integer in "
+         f"[1, {usable_cores()}], the cores this process may use"),
+        (["--threads", "100000"], "--threads: '100000' is not valid; it must be an integer in "),
         (["--spin-up", "0.001"], "--spin-up: '0.001' is not valid; it must be finite and >= 0.02"),
         (["--dt", "0"], "--dt: '0' is not valid; it must be finite and > 0 s"),
         (["--slice-sizes", "100"], "--slice-sizes: '100' is not valid; it must be >= 392"),
@@ -202,3 +209,14 @@ def test_throughput_main_refuses_bad_options(capsys) -> None:
         bench.main(["--threads", "0"], prog="throughput.py")
     assert exc.value.code == 2
     assert "throughput.py: error: argument --threads: '0' is not valid" in capsys.readouterr().err
+
+
+def test_run_refuses_more_threads_than_the_cores_before_preparing(tmp_path: Path) -> None:
+    """A thread count above the cores this process may use crashed or hung the OpenMP runtime
+    (100000 and 10000 threads): it is refused before anything is prepared."""
+    n = usable_cores() + 1
+    with pytest.raises(ValueError, match=rf"threads = {n} is not valid; it must be an integer "
+                       rf"in \[1, {n - 1}\], the cores this process may use"):
+        bench.run("tiny", ["balls"], [1, n], steps=2, spin_up_s=0.02, cache_dir=tmp_path,
+                  progress=False, out=io.StringIO())
+    assert not list(tmp_path.iterdir())

@@ -253,7 +253,8 @@ def test_workers_end_with_a_killed_campaign(tmp_path: Path, sig: int) -> None:
 
 def test_b_dask_cluster_gives_the_same_torque_as_local_processes(tmp_path: Path) -> None:
     distributed = pytest.importorskip("distributed")
-    local = campaign(tmp_path / "local", (0.62, 0.80)).run(max_workers=2, progress=False)
+    local = campaign(tmp_path / "local", (0.62, 0.80)).run(
+        max_workers=min(2, _available_cores()), progress=False)
     with distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:

@@ -11,7 +11,7 @@ import pytest
 from millscope.cli import main
 from millscope.synthetic import SyntheticTorque, synthetic_record
 
-from .cpu import runs_wide_pair_search
+from .cpu import runs_wide_pair_search, usable_cores
 
 
 @pytest.fixture
@@ -22,12 +22,55 @@ def csv_record(tmp_path):
     return path
 
 
+WIDE_LINE = "pair search       AVX-512, 8 listed pairs at a time"
+PORTABLE_LINE = "pair search       portable, one listed pair at a time (no AVX-512 F and VL here)"
+
+
 def test_info_runs_as_a_module() -> None:
+    """The pair search line says which search this CPU runs, as /proc/cpuinfo tells it: on a
+    CPU with AVX-512 and on one without (the portable line names AVX-512 too, as missing)."""
     out = subprocess.run([sys.executable, "-m", "millscope", "info"], capture_output=True,
                          text=True, check=True).stdout
     assert "FFTW" in out and "fftw-3" in out and "OpenMP" in out and "threads" in out
     search = next(line for line in out.splitlines() if line.startswith("pair search"))
-    assert ("AVX-512" in search) == runs_wide_pair_search()
+    assert search == (WIDE_LINE if runs_wide_pair_search() else PORTABLE_LINE)
+
+
+@pytest.mark.parametrize("wide, line", [(True, WIDE_LINE), (False, PORTABLE_LINE)])
+def test_info_names_the_pair_search_of_either_cpu(monkeypatch: pytest.MonkeyPatch,
+                                                 capsys: pytest.CaptureFixture[str],
+                                                 wide: bool, line: str) -> None:
+    """Both lines, whatever this host has: the build facts are replaced by a CPU's that has
+    (or lacks) AVX-512."""
+    from millscope import _core
+
+    facts = dict(_core.build_info(), wide_pair_search=wide)
+    monkeypatch.setattr(_core, "build_info", lambda: facts)
+    assert main(["info"]) == 0
+    assert line in capsys.readouterr().out.splitlines()
+
+
+@pytest.mark.parametrize("command", [
+    ["demo", "--no-progress"],
+    ["study", "accuracy", "--vary-dt-fraction", "0.1", "--no-progress"],
+    ["bench", "--scale", "tiny", "--scenes", "balls", "--steps", "2", "--spin-up", "0.02",
+     "--no-progress"],
+])
+def test_more_threads_than_the_cores_are_one_line_and_exit_2(
+        capsys: pytest.CaptureFixture[str], tmp_path, command: list[str]) -> None:
+    """`bench --threads 100000` crashed with a segfault (exit 139) and 10000 hung; demo and
+    study take the same counts per case: refused by the option, before anything runs."""
+    too_many = usable_cores() + 1
+    out = ["--cache-dir" if command[0] == "bench" else "--out", str(tmp_path / "out")]
+    with pytest.raises(SystemExit) as stop:
+        main([*command, *out, "--threads", str(too_many)])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert err.splitlines()[-1].endswith(
+        f"error: argument --threads: '{too_many}' is not valid; it must be an integer in "
+        f"[1, {usable_cores()}], the cores this process may use")
+    assert not (tmp_path / "out").exists()
 
 
 def test_analyze_prints_the_figures_and_writes_plots(csv_record, tmp_path, capsys) -> None:

@@ -29,6 +29,8 @@ from millscope.studies import (
     run_study,
 )
 
+from .cpu import usable_cores
+
 # -- settings and plans (no simulation) --------------------------------------------------------
 
 
@@ -467,7 +469,8 @@ def test_a_dt_ladder_within_the_limit_keeps_the_mean_torque_within_5_percent(tmp
     ladder = (0.05, 0.1, 0.5)
     base = Setting(record_s=3.0, warm_up_s=1.5, sampling="instant")
     plan = StudyPlan.ladder("dt_fraction", ladder, base=base, seeds=(0, 1, 2, 3))
-    result = run_study(plan, tmp_path / "store", max_workers=2, progress=False)
+    result = run_study(plan, tmp_path / "store", max_workers=min(2, usable_cores()),
+                       progress=False)
     rows = {r.setting.dt_fraction: r for r in result.rows}
     rotation = [rows[f].n_particles * base.duration_s / rows[f].dt_s for f in ladder]
     assert rotation == pytest.approx([rotation[0] * ladder[0] / f for f in ladder])
@@ -482,7 +485,8 @@ def test_a_campaign_study_compares_the_log_fit_slope(tmp_path) -> None:
     energies, and every quantity of every level, against the smaller step."""
     plan = StudyPlan.ladder("dt_fraction", [0.1, 0.4], base=Setting(record_s=1.0, warm_up_s=0.5),
                             particles="ceramic", load_levels=(1, 2), seeds=(0, 1))
-    result = run_study(plan, tmp_path / "store", max_workers=2, progress=False)
+    result = run_study(plan, tmp_path / "store", max_workers=min(2, usable_cores()),
+                       progress=False)
     assert len(result.rows) == 2 * 2
     ref_rows = [r for r in result.rows if r.reference]
     assert all(r.quantities["slope_a"].error == 0.0 for r in ref_rows)
@@ -514,7 +518,8 @@ def test_a_stiffness_ladder_costs_more_for_stiffer_charges(tmp_path) -> None:
     plan = StudyPlan.ladder("shear_modulus_factor", [0.001, 0.01, 0.1],
                             base=Setting(record_s=1.0, warm_up_s=0.5), seeds=(0, 1))
     assert plan.reference.shear_modulus_factor == 0.1
-    result = run_study(plan, tmp_path / "store", max_workers=2, progress=False)
+    result = run_study(plan, tmp_path / "store", max_workers=min(2, usable_cores()),
+                       progress=False)
     rows = {r.setting.shear_modulus_factor: r for r in result.rows}
     for soft, stiff in itertools.pairwise((0.001, 0.01, 0.1)):
         assert rows[stiff].dt_s == pytest.approx(rows[soft].dt_s / math.sqrt(10))

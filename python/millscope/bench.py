@@ -39,7 +39,13 @@ from . import presets
 from ._core import build_info
 from .contact import MAX_DT_FRACTION
 from .scene import Scene
-from .simulation import CHECKPOINT_FORMAT, Simulation
+from .simulation import (
+    CHECKPOINT_FORMAT,
+    Simulation,
+    _available_cores,
+    check_threads,
+    threads_range,
+)
 
 __all__ = [
     "DEFAULT_CACHE_DIR",
@@ -296,6 +302,20 @@ def _int_at_least(least: int, why: str = "") -> Callable[[str], int]:
     return parse
 
 
+def thread_count(text: str) -> int:
+    """An argparse type: an engine thread count in [1, the cores this process may use]
+    (:func:`millscope.simulation.check_threads`)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    try:
+        return check_threads(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not valid; it must be "
+                                         f"{threads_range()}") from None
+
+
 def _float_at_least(least: float, unit: str, strict: bool = False) -> Callable[[str], float]:
     def parse(text: str) -> float:
         try:
@@ -319,8 +339,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenes", nargs="+", choices=[*SCENES, SLICE], default=None,
                         help="scenes to time (default: all but slice; only slice when "
                              "--slice-sizes is given)")
-    parser.add_argument("--threads", nargs="+", type=_int_at_least(1), default=[1, 2],
-                        help="thread counts (default 1 2)")
+    parser.add_argument("--threads", nargs="+", type=thread_count, default=None,
+                        help="thread counts, each at most the cores this process may use "
+                             "(default 1 2, or 1 where the process may use one core)")
     parser.add_argument("--steps", type=_int_at_least(2), default=20000,
                         help="timed steps per run (default 20000)")
     parser.add_argument("--spin-up", type=_float_at_least(MIN_SPIN_UP_S, " s"), default=0.5,
@@ -368,7 +389,7 @@ def _check_dt(names: Sequence[str], scale: str, dt: float | None) -> None:
 
 
 def run(scale: str = "paper", scenes: Sequence[str] | None = None,
-        threads: Sequence[int] = (1, 2), steps: int = 20000, spin_up_s: float = 0.5, *,
+        threads: Sequence[int] | None = None, steps: int = 20000, spin_up_s: float = 0.5, *,
         dt: float | None = None, slice_sizes: Sequence[int] | None = None,
         cache_dir: str | Path = DEFAULT_CACHE_DIR, use_cache: bool = True,
         progress: bool = True, out: TextIO | None = None) -> dict[tuple[str, int], Measurement]:
@@ -381,8 +402,9 @@ def run(scale: str = "paper", scenes: Sequence[str] | None = None,
     scenes : sequence of str, optional
         Names from :data:`SCENES` and/or ``"slice"``; default every fixed scene, or only
         ``"slice"`` when ``slice_sizes`` is given.
-    threads : sequence of int
-        Thread counts, each >= 1.
+    threads : sequence of int, optional
+        Thread counts, each in [1, the cores this process may use]; default 1 and 2 (only 1
+        where the process may use one core).
     steps : int
         Timed steps per run, >= 2.
     spin_up_s : float
@@ -407,9 +429,12 @@ def run(scale: str = "paper", scenes: Sequence[str] | None = None,
     """
     stream = out or sys.stdout
     names = _scene_names(scenes, slice_sizes)
+    if threads is None:
+        threads = [1, 2] if _available_cores() >= 2 else [1]
     threads = list(dict.fromkeys(threads))  # in the order given, once each
-    if not threads or min(threads) < 1:
-        raise ValueError(f"threads = {threads!r} is not valid; each must be an integer >= 1")
+    if not threads:
+        raise ValueError("threads = [] is not valid; give at least one thread count")
+    threads = [check_threads(n) for n in threads]
     if not (math.isfinite(spin_up_s) and spin_up_s >= MIN_SPIN_UP_S):
         raise ValueError(f"spin_up_s = {spin_up_s!r} s is not valid; it must be >= "
                          f"{MIN_SPIN_UP_S} s")

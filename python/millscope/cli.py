@@ -327,6 +327,8 @@ def torque_file_options(args: argparse.Namespace) -> dict[str, object]:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .bench import thread_count
+
     parser = argparse.ArgumentParser(
         prog="millscope",
         description="Ball-mill DEM and filling-level estimation from drive torque spectra.")
@@ -422,8 +424,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="first seconds not kept; the block is WARM_UP..DURATION (default 2; "
                         "the paper's 4)")
     p.add_argument("--seed", type=int, help="filling seed (default 0)")
-    p.add_argument("--threads", type=_positive_int,
-                   help="engine threads per case (default 1)")
+    p.add_argument("--threads", type=thread_count,
+                   help="engine threads per case, at most the cores this process may use "
+                        "(default 1)")
     p.add_argument("--workers", type=_positive_int, default=None,
                    help="parallel cases (default: cores / threads)")
     p.set_defaults(func=cmd_demo)
@@ -500,8 +503,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quantity", default="energy",
                    choices=["mean_torque", "energy", "lth_amplitude", "slope_a"],
                    help="the error plotted and whose Pareto front is marked (default energy)")
-    p.add_argument("--threads", type=_positive_int, default=1,
-                   help="engine threads per run (default 1)")
+    p.add_argument("--threads", type=thread_count, default=1,
+                   help="engine threads per run, at most the cores this process may use "
+                        "(default 1)")
     p.add_argument("--workers", type=_positive_int, default=1,
                    help="runs at a time (default 1, so that their wall times do not disturb "
                         "each other)")

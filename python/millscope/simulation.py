@@ -36,6 +36,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import signal
 import threading
 import warnings
@@ -49,14 +50,14 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _core
+from . import _checkpoint, _core
 from ._files import atomic_write
 from .contact import DEFAULT_DT_FRACTION, MAX_DT_FRACTION
 from .record import TorqueRecord
 from .scene import Scene
 from .stiffness import upper_impact_speed
 
-__all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation"]
+__all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation", "check_threads"]
 
 CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"; 3: "order"
 _FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
@@ -114,6 +115,10 @@ class SettleReport:
 
 
 Phase = Literal["empty", "filled", "settled", "rotating"]
+_PHASES: tuple[Phase, ...] = ("empty", "filled", "settled", "rotating")
+#: The arrays of the engine's snapshot, saved as .npy members of a checkpoint.
+_SNAPSHOT_ARRAYS = ("order", "x", "v", "w", "f", "t", "x_ref", "wall_history", "wall_lifter",
+                    "list_start", "list_partner", "list_history")
 
 
 class Simulation:
@@ -130,7 +135,8 @@ class Simulation:
         charge. A step above ``MAX_DT_FRACTION`` (0.5) x that time raises ``ValueError``
         naming the limit and the fraction that sets it.
     threads : int, optional
-        OpenMP threads of the engine; default: the cores this process may use. Runs are
+        OpenMP threads of the engine, in [1, the cores this process may use] (else
+        ``ValueError``, see :func:`check_threads`); default: all those cores. Runs are
         reproducible bit for bit at a given thread count.
     skin : float, optional
         Verlet-list skin, m; default 0.4 x the smallest particle radius.
@@ -163,10 +169,7 @@ class Simulation:
                 f"dt = {dt!r} s is not valid; it must be in (0, {limit:.6g}] s, "
                 f"{MAX_DT_FRACTION} x the Rayleigh time {t_rayleigh:.6g} s of the fraction "
                 f"{which!r}, the stiffest in the charge")
-        if threads is None:
-            threads = _available_cores()
-        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
-            raise ValueError(f"threads = {threads!r} is not valid; it must be an integer >= 1")
+        threads = _available_cores() if threads is None else check_threads(threads)
         if skin is not None and not (math.isfinite(skin) and skin > 0.0):
             raise ValueError(f"skin = {skin!r} m is not valid; it must be finite and > 0")
         for name, value in (("settle_tolerance", settle_tolerance),
@@ -475,48 +478,103 @@ class Simulation:
 
         ``threads`` defaults to the thread count of the saved run (needed for a bit-for-bit
         continuation), ``track_energy`` to the saved run's (a run continued without it keeps
-        the same motion; its losses read NaN from then on). A damaged file, a file that is
-        not a checkpoint or one from another millscope version raises
-        :class:`CheckpointError`.
+        the same motion; its losses read NaN from then on).
+
+        A checkpoint is untrusted input: every array and number the engine would take is
+        checked first (:mod:`millscope._checkpoint` lists the checks). A damaged file, a file
+        that is not a checkpoint, one from another millscope version, one whose fields break
+        the engine's invariants (an index out of range, a count below 0, an unknown phase,
+        values of the wrong type or precision, a time step outside the scene's range), or
+        whose saved thread count exceeds the cores this process may use (pass ``threads``)
+        raises :class:`CheckpointError` and nothing else; ``threads`` and ``track_energy``
+        themselves are checked as in the constructor (``ValueError``).
         """
+        if threads is not None:
+            threads = check_threads(threads)
+        if track_energy is not None and not isinstance(track_energy, (bool, np.bool_)):
+            raise ValueError(f"track_energy = {track_energy!r} is not valid; it must be None, "
+                             "True or False")
         path = Path(path)
         try:
-            with np.load(path, allow_pickle=False) as z:
-                meta = json.loads(str(z["meta_json"]))
-                arrays = {k: z[k] for k in z.files if k != "meta_json"}
+            with zipfile.ZipFile(path) as zf:
+                return cls._from_checkpoint(zf, threads, track_energy)
         except FileNotFoundError:
             raise
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as exc:
-            raise CheckpointError(f"{path} is damaged or not a millscope checkpoint: {exc}") \
-                from None
-        if not isinstance(meta, dict) or meta.get("format") != CHECKPOINT_FORMAT:
-            raise CheckpointError(f"{path} is not a millscope checkpoint (format "
-                                  f"{meta.get('format') if isinstance(meta, dict) else None!r}, "
+        except CheckpointError as exc:
+            raise CheckpointError(f"{path}: {exc}") from None
+        except _checkpoint.Refused as exc:
+            raise CheckpointError(f"{path} is not a valid millscope checkpoint: {exc}") from None
+        except Exception as exc:  # noqa: BLE001 - whatever a damaged file provokes
+            raise CheckpointError(f"{path} is damaged or not a millscope checkpoint: "
+                                  f"{type(exc).__name__}: {exc}") from None
+
+    @classmethod
+    def _from_checkpoint(cls, zf: zipfile.ZipFile, threads: int | None,
+                         track_energy: bool | None) -> Simulation:
+        """The simulation a checkpoint holds, every field checked (see :meth:`load`)."""
+        ck = _checkpoint
+        names = {"meta_json", *_SNAPSHOT_ARRAYS}
+        meta = ck.read_meta(zf, zf.getinfo("meta_json.npy"))
+        if meta.get("format") != CHECKPOINT_FORMAT:
+            raise CheckpointError(f"not a millscope checkpoint (format {meta.get('format')!r}, "
                                   f"expected {CHECKPOINT_FORMAT!r})")
         version = _core.build_info()["version"]
         if meta.get("millscope_version") != version:
             raise CheckpointError(
-                f"{path} was written by millscope {meta.get('millscope_version')}; this is "
-                f"{version}, which cannot continue it exactly. Rerun the case, or load it with "
-                "the version that wrote it.")
+                f"written by millscope {meta.get('millscope_version')!r}; this is {version}, "
+                "which cannot continue it exactly. Rerun the case, or load it with the version "
+                "that wrote it.")
+        found = ck.members(zf, names)
+        keys = {"format", "millscope_version", "scene", "seed", "dt", "threads", "skin",
+                "track_energy", "phase", "settle", "rng_state", "engine_scalars"}
+        if meta.keys() != keys:
+            raise ck.Refused(f"its meta has the keys {sorted(meta)}; a checkpoint's are "
+                             f"{sorted(keys)}")
         try:
             scene = Scene.from_dict(meta["scene"])
-            tol, t_min, t_max = meta["settle"]
-            sim = cls(scene, seed=meta["seed"], dt=meta["dt"],
-                      threads=meta["threads"] if threads is None else threads,
-                      skin=meta["skin"], settle_tolerance=tol, settle_min_s=t_min,
-                      settle_max_s=t_max,
-                      track_energy=meta.get("track_energy", True) if track_energy is None
-                      else track_energy)
-            snapshot: dict[str, Any] = dict(arrays)
-            for k, v in meta["engine_scalars"].items():
-                snapshot[k] = tuple(v) if isinstance(v, list) else v
-            sim._engine.restore(snapshot)
-            sim._rng.bit_generator.state = meta["rng_state"]
-            sim._phase = meta["phase"]
-        except (KeyError, TypeError, ValueError) as exc:
-            raise CheckpointError(f"{path} is damaged or not a millscope checkpoint: {exc}") \
-                from None
+        except Exception as exc:  # noqa: BLE001 - the scene's own checks, whatever they raise
+            raise ck.Refused(f"its scene is not valid: {exc}") from None
+        seed = ck.integer("seed", meta["seed"], 0, 2**64 - 1)
+        dt = ck.check_dt(meta["dt"], scene)
+        saved_threads = ck.integer("threads", meta["threads"], 1)
+        if threads is None:
+            try:
+                threads = check_threads(saved_threads)
+            except ValueError as exc:
+                raise ck.Refused(f"{exc}; pass threads= to load it here (the continuation is "
+                                 "then not bit for bit that of the saved run)") from None
+        skin = ck.check_skin(meta["skin"], scene)
+        saved_energy = ck.boolean("track_energy", meta["track_energy"])
+        phase = meta["phase"]
+        if phase not in _PHASES:
+            raise ck._refuse("phase", phase, f"one of {', '.join(_PHASES)}")
+        tol, t_min, t_max = ck.check_settle(meta["settle"])
+        try:
+            sim = cls(scene, seed=seed, dt=dt, threads=threads, skin=skin,
+                      settle_tolerance=tol, settle_min_s=t_min, settle_max_s=t_max,
+                      track_energy=saved_energy if track_energy is None else track_energy)
+        except ValueError as exc:
+            raise ck.Refused(str(exc)) from None
+        rng_state = ck.check_rng_state(meta["rng_state"], sim._rng.bit_generator.state)
+        # The engine just made for the scene says what each field must look like.
+        template = sim._engine.snapshot()
+        scalars = ck.check_scalars(meta["engine_scalars"],
+                                   {k: v for k, v in template.items() if k not in names},
+                                   phase, scene, dt)
+        n = scene.n_particles
+        partners = ck.max_partners(scene, sim._engine.skin)
+        history_size = 3 if template["wall_history"].size else 0  # friction: a spring per pair
+        limits = {"list_start": n + 1, "list_partner": partners,
+                  "list_history": history_size * partners}
+        arrays = {k: ck.read_npy(zf, found[k], template[k].dtype,
+                                 limits.get(k, template[k].size))
+                  for k in _SNAPSHOT_ARRAYS}
+        ck.check_arrays(arrays, scalars, scene, float(sim._engine.skin),
+                        float(sim._engine.max_speed), history_size,
+                        template["wall_history"].size)
+        sim._engine.restore({**arrays, **scalars})
+        sim._rng.bit_generator.state = rng_state
+        sim._phase = phase
         return sim
 
     def __repr__(self) -> str:
@@ -527,10 +585,44 @@ class Simulation:
 # -- helpers ---------------------------------------------------------------------------------
 
 def _available_cores() -> int:
+    """The cores this process may use: its CPU affinity, else the machine's count."""
     try:
         return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
+    except (AttributeError, OSError):  # not on Linux
         return os.cpu_count() or 1
+
+
+def check_threads(threads: object, name: str = "threads") -> int:
+    """``threads`` as an int when it is a usable engine thread count, else ``ValueError``.
+
+    Parameters
+    ----------
+    threads : object
+        The thread count asked for.
+    name : str
+        How the message names it.
+
+    Returns
+    -------
+    int
+        The count, in [1, N] with N the cores this process may use (its CPU affinity, else
+        the machine's count). More OpenMP threads than that only contend for the same cores,
+        and very large counts crash or hang the OpenMP runtime.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, the value and the valid range.
+    """
+    if (isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (int, np.integer))
+            or not 1 <= threads <= _available_cores()):
+        raise ValueError(f"{name} = {threads!r} is not valid; it must be {threads_range()}")
+    return int(threads)
+
+
+def threads_range() -> str:
+    """What a thread count must be, for messages: "an integer in [1, N], ..."."""
+    return f"an integer in [1, {_available_cores()}], the cores this process may use"
 
 
 def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
@@ -549,13 +641,51 @@ def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
     geometry = _core.DrumGeometry(**geometry_args)
     restitution, friction = scene.pair_matrices()
     materials = [_core.Material(m.density, m.shear_modulus, m.poisson) for m in scene.materials]
-    return _core.Engine(materials, restitution, friction, scene.material_index(drum.material),
-                        geometry, scene.particle_radii(), scene.particle_materials(), dt,
-                        gravity=scene.gravity, skin=0.0 if skin is None else skin,
-                        clamp_normal=scene.clamp_normal_force, threads=threads,
-                        track_energy=track_energy,
-                        max_speed=SPEED_BOUND_FACTOR * upper_impact_speed(scene),
-                        max_overlap=MAX_OVERLAP_FRACTION)
+    return _GuardedEngine(materials, restitution, friction, scene.material_index(drum.material),
+                          geometry, scene.particle_radii(), scene.particle_materials(), dt,
+                          gravity=scene.gravity, skin=0.0 if skin is None else skin,
+                          clamp_normal=scene.clamp_normal_force, threads=threads,
+                          track_energy=track_energy,
+                          max_speed=SPEED_BOUND_FACTOR * upper_impact_speed(scene),
+                          max_overlap=MAX_OVERLAP_FRACTION)
+
+
+_GUARD_WHERE = re.compile(r"stopped at step (\d+) \(t = [^)]* s\)")
+
+
+class _GuardedEngine(_core.Engine):  # type: ignore[misc]
+    """The engine, with its guard messages (a run stopped by the speed, overlap or state
+    guards) on the record's time axis: the engine counts time from the filling, a record from
+    the start of rotation (:attr:`Simulation.time`)."""
+
+    def advance(self, *args: Any, **kwargs: Any) -> None:
+        try:
+            super().advance(*args, **kwargs)
+        except RuntimeError as exc:
+            raise self._on_record_time(exc) from None
+
+    def advance_sampled(self, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return super().advance_sampled(*args, **kwargs)
+        except RuntimeError as exc:
+            raise self._on_record_time(exc) from None
+
+    def _on_record_time(self, exc: RuntimeError) -> RuntimeError:
+        """The guard's message with the time of its step on the record's axis (since the start
+        of rotation), or said to be during settling (since filling) before rotation."""
+        message = str(exc)
+        found = _GUARD_WHERE.search(message)
+        if found is None:
+            return exc
+        step = int(found.group(1))
+        start = int(self.rotation_start_step)
+        if start >= 0:
+            where = (f"stopped at step {step} (t = {(step - start) * self.dt:.6g} s since the "
+                     "start of rotation, the record's time)")
+        else:
+            where = (f"stopped at step {step} (during settling, t = {step * self.dt:.6g} s since "
+                     "filling)")
+        return type(exc)(message[:found.start()] + where + message[found.end():])
 
 
 def _fill_positions(scene: Scene, rng: np.random.Generator) -> NDArray[np.float64]:

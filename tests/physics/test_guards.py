@@ -227,3 +227,43 @@ def test_a_sound_run_stays_inside_the_guards(scale: str, deepest_seen: float) ->
         fastest = max(fastest, float(np.max(np.linalg.norm(sim._engine.velocities, axis=1))))
     assert deepest < min(MAX_OVERLAP_FRACTION, 1.5 * deepest_seen)
     assert fastest < SPEED_BOUND_FACTOR * upper_impact_speed(sim.scene) / 5
+
+
+def stopped_at(message: str) -> tuple[int, float]:
+    found = re.search(r"stopped at step (\d+) \((?:during settling, )?t = ([-+0-9.e]+) s", message)
+    assert found, message
+    return int(found.group(1)), float(found.group(2))
+
+
+def test_a_guard_stopping_a_run_gives_the_record_s_time() -> None:
+    """The engine counts time from the filling; the record from the start of rotation. A
+    particle sent far beyond the speed bound 0.02 s into the rotation stops the next run at
+    once: the message gives that moment on the record's axis (within one sample of the
+    record's last time), not the time since filling (settling took at least 0.1 s more)."""
+    sim = ms.Simulation(ms.presets.pilot_mill(0.71, None, scale="tiny"), seed=0, threads=1,
+                        settle_tolerance=10.0, settle_min_s=0.1, settle_max_s=0.2)
+    rec = sim.run(0.02, sample_dt=0.01, progress=False)
+    v = sim.velocities.copy()
+    v[5] = [0.0, 0.0, 2.0 * sim._engine.max_speed]  # along the periodic axis
+    sim._engine.velocities = v
+    with pytest.raises(RuntimeError, match=r"since the start of rotation, the record's time"
+                       r"\): particle 5 .*moves at") as stop:
+        sim.run(0.02, sample_dt=0.01, progress=False)
+    step, t = stopped_at(str(stop.value))
+    assert step == sim._engine.step_count
+    assert t == pytest.approx(sim.time, rel=1e-5)
+    assert abs(t - rec.time_s[-1]) <= 0.01
+
+
+def test_a_guard_stopping_the_settling_says_so() -> None:
+    sim = ms.Simulation(ms.presets.pilot_mill(0.71, None, scale="tiny"), seed=0, threads=1)
+    sim.fill()
+    v = sim.velocities.copy()
+    v[5] = [0.0, 0.0, 2.0 * sim._engine.max_speed]
+    sim._engine.velocities = v
+    with pytest.raises(RuntimeError, match=r"\(during settling, t = .* s since filling\): "
+                       r"particle 5 ") as stop:
+        sim.settle(progress=False)
+    step, t = stopped_at(str(stop.value))
+    assert step == sim._engine.step_count and sim.time == 0.0
+    assert t == pytest.approx(step * sim.dt, rel=1e-5)

@@ -13,6 +13,8 @@ import pytest
 
 import millscope as ms
 
+from ..cpu import usable_cores
+
 RUN_S = 5.0  # simulated after settling, s: a 4 s block (in 2 s blocks the LTH is not
 # reliably the strongest line: seeds 1 and 2 both put 10.5 Hz above it from 1 to 3 s)
 STEADY_FROM_S = 1.0  # the charge has found its shape after about 1 s
@@ -21,7 +23,7 @@ STEADY_FROM_S = 1.0  # the charge has found its shape after about 1 s
 @pytest.fixture(scope="module")
 def mill_run():  # type: ignore[no-untyped-def]
     scene = ms.presets.pilot_mill(0.71, None, scale="soft")
-    sim = ms.Simulation(scene, seed=1, threads=2)
+    sim = ms.Simulation(scene, seed=1, threads=min(2, usable_cores()))
     sim.settle(progress=False)
     sim.run(STEADY_FROM_S, progress=False)
     before = sim.energies()
