@@ -7,7 +7,7 @@ This module exposes it for checks and advice:
 - :func:`pair_properties`: E*, G*, R*, m*, beta of a pair of bodies;
 - :func:`rayleigh_time`, :func:`hertz_contact_time`, :func:`hertz_max_overlap`,
   :func:`hertz_stability_dt`: time-step criteria (the engine's default step is
-  ``DEFAULT_DT_FRACTION`` x the smallest Rayleigh time and it refuses steps above
+  ``DEFAULT_DT_FRACTION`` x the smallest Rayleigh time and it never takes steps above
   ``MAX_DT_FRACTION`` x that time; :mod:`millscope.stiffness` applies them to a scene);
 - :func:`verlet_stability_bound`, :func:`contact_modes`: the fastest modes of a contact (the
   damped normal mode and the tangential stick mode coupled with rotation) and the largest step
@@ -56,7 +56,8 @@ __all__ = [
 
 #: Default time step as a fraction of the smallest Rayleigh time (DESIGN.md section 2).
 DEFAULT_DT_FRACTION: float = float(_core.DEFAULT_DT_FRACTION)
-#: Largest time step the engine accepts, as a fraction of the smallest Rayleigh time.
+#: Largest time step the engine accepts, as a fraction of the smallest Rayleigh time (its cap;
+#: a scene's contacts may set a lower limit, :func:`millscope.stiffness.time_step_limit`).
 MAX_DT_FRACTION: float = float(_core.MAX_DT_FRACTION)
 
 
@@ -244,7 +245,8 @@ def rayleigh_time(diameter: float, density: float, shear_modulus: float,
     """Rayleigh time T_R = pi r sqrt(rho/G) / (0.1631 nu + 0.8766), s, of a sphere.
 
     The engine's default step is ``DEFAULT_DT_FRACTION`` (0.2) x the smallest T_R of the charge
-    and it refuses steps above ``MAX_DT_FRACTION`` (0.5) x that time.
+    and it refuses steps above ``MAX_DT_FRACTION`` (0.5) x that time, or above the lower limit
+    its contacts' modes may set (:func:`millscope.stiffness.time_step_limit`).
     """
     return float(_core.rayleigh_time(_positive(diameter, "diameter", "m") / 2,
                                      _positive(density, "density", "kg/m^3"),
