@@ -302,11 +302,13 @@ STICK_MODE = "tangential-rotational stick"
 #:   pair alone: for three like spheres in a line the normal one is sqrt(3 k / m) against the
 #:   pair's sqrt(2 k / m) (x 1.22) and the stick one sqrt(8.5 / 7) = 1.10 x the pair's (M2);
 #:   1 / 1.22 = 0.82;
-#: - measured on single impacts with the engine's integrator (``tests/physics/test_timestep.py``):
-#:   at the presets' upper impact speeds, restitution and spin at 0.8 x the bound are as close to
-#:   their converged values as at 0.2 x it; the steel pairs (e = 0.5, the least damped, whose
-#:   elastic overlap overstates the damped one least) lose accuracy from 0.95 x the bound on, and
-#:   every pair's spin goes wrong in sign or size by 1.2 x it;
+#: - measured on oblique impacts at the upper impact speed of the x 0.001 presets, against
+#:   converged ones (``tests/physics/test_timestep.py``): at 0.8 x the bound the spin errs no
+#:   more than at 0.2 x it (up to 19-28 % at low tangential speeds, the touch-down slip) and the
+#:   restitution by at most 7 %; the steel pairs (e = 0.5, the least damped, whose elastic
+#:   overlap overstates the damped one least) lose accuracy from 0.95 x the bound on (spin up to
+#:   41 %, then 52 % at 1.0), and at 1.2 x it every pair has impacts whose spin is off by more
+#:   than 100 %, often in sign;
 #: - it keeps the default step, 0.2 x the Rayleigh time, valid for every preset: the smallest
 #:   bound among them (ceramic particles on the drum, moduli x 0.001, 3 x critical speed) is
 #:   0.345 Rayleigh times, and 0.8 x 0.345 = 0.276.

@@ -120,11 +120,15 @@ def test_modes_follow_the_paper_law() -> None:
     p = pair_properties(cer, steel, 0.012, 0.025)
     d = (15 * p.m_star * 25.0 / (16 * p.e_star * math.sqrt(p.r_star))) ** 0.4
     zeta = -math.sqrt(5 / 6) * _beta(0.2)
-    assert normal == ContactMode(NORMAL_MODE, pytest.approx(2 * p.e_star * math.sqrt(p.r_star * d)),
-                                 pytest.approx(p.m_star), pytest.approx(zeta), pytest.approx(d))
-    assert stick == ContactMode(STICK_MODE, pytest.approx(8 * p.g_star * math.sqrt(p.r_star * d)),
-                                pytest.approx(p.m_star / 3.5), pytest.approx(math.sqrt(3.5) * zeta),
-                                pytest.approx(d))
+    def fields(m: ContactMode) -> tuple[float, ...]:
+        return m.stiffness, m.mass, m.damping_ratio, m.overlap
+
+    assert (normal.name, stick.name) == (NORMAL_MODE, STICK_MODE)
+    assert fields(normal) == pytest.approx(
+        (2 * p.e_star * math.sqrt(p.r_star * d), p.m_star, zeta, d), rel=1e-12)
+    assert fields(stick) == pytest.approx(
+        (8 * p.g_star * math.sqrt(p.r_star * d), p.m_star / 3.5, math.sqrt(3.5) * zeta, d),
+        rel=1e-12)
     assert stick.stability_dt == pytest.approx(
         verlet_stability_bound(math.sqrt(3.5) * zeta) / math.sqrt(3.5 * stick.stiffness / p.m_star))
     assert len(contact_modes(cer, steel, 0.012, 0.025, 5.0, 0.2, 0.0)) == 1  # no friction
@@ -144,18 +148,25 @@ def test_the_stick_mass_is_that_of_the_contact_points_slip(wall: bool) -> None:
     assert 1 / float(g @ (g / masses)) == pytest.approx(m_star / 3.5, rel=1e-12)
 
 
+def _bodies(pair: str) -> tuple[ms.Fraction, ms.Fraction | None, ms.Material, ms.Material,
+                                 ms.Pair]:
+    """Fraction a, fraction b (None: the drum), their materials and the pair's coefficients,
+    from a label ``"<fraction> (<material>) - <fraction or drum> (<material>)"``."""
+    a_name, b_name = (side.split(" (")[0] for side in pair.split(" - "))
+    fa = next(f for f in LD_TINY.charge if f.name == a_name)
+    fb = None if b_name == "drum" else next(f for f in LD_TINY.charge if f.name == b_name)
+    mat_a = LD_TINY.material(fa.material)
+    mat_b = LD_TINY.material(LD_TINY.drum.material if fb is None else fb.material)
+    return fa, fb, mat_a, mat_b, LD_TINY.pair(mat_a.name, mat_b.name)
+
+
 def _pressed(mode: ContactMode, pair: str, dt_factor: float, steps: int = 300) -> float:
     """Two bodies of ``pair`` pressed together by a central load that holds ``mode.overlap``,
     disturbed along the mode (a normal or a tangential velocity of a) and integrated with the
     engine's contact law and kick-drift-kick at dt_factor x the mode's bound. Returns the
     largest disturbance force over the last 50 steps / over the first 10."""
-    a_name, b_name = (side.split(" (")[0] for side in pair.split(" - "))
-    fa = next(f for f in LD_TINY.charge if f.name == a_name)
-    wall = b_name == "drum"
-    fb = None if wall else next(f for f in LD_TINY.charge if f.name == b_name)
-    mat_a = LD_TINY.material(fa.material)
-    mat_b = LD_TINY.material(LD_TINY.drum.material if fb is None else fb.material)
-    coeff = LD_TINY.pair(mat_a.name, mat_b.name)
+    fa, fb, mat_a, mat_b, coeff = _bodies(pair)
+    wall = fb is None
     core = [_core.Material(m.density, m.shear_modulus, m.poisson) for m in (mat_a, mat_b)]
     pc = _core.pair_constants(core[0], core[1], coeff.restitution, 1e6)  # never sliding
     ra, rb = fa.radius, (0.0 if fb is None else fb.radius)
@@ -213,13 +224,9 @@ def test_a_pressed_contact_is_stable_just_below_its_bound_and_not_just_above(
 
 # -- 3. impacts --------------------------------------------------------------------------------
 
-def _impact_spec(pair: str) -> tuple[object, object, float, float | None, float, float]:
-    a_name, b_name = (side.split(" (")[0] for side in pair.split(" - "))
-    fa = next(f for f in LD_TINY.charge if f.name == a_name)
-    fb = None if b_name == "drum" else next(f for f in LD_TINY.charge if f.name == b_name)
-    mat_a = LD_TINY.material(fa.material)
-    mat_b = LD_TINY.material(LD_TINY.drum.material if fb is None else fb.material)
-    coeff = LD_TINY.pair(mat_a.name, mat_b.name)
+def _impact_spec(pair: str) -> tuple[ms.Material, ms.Material, float, float | None, float,
+                                     float]:
+    fa, fb, mat_a, mat_b, coeff = _bodies(pair)
     return (mat_a, mat_b, fa.diameter, None if fb is None else fb.diameter, coeff.restitution,
             coeff.friction)
 
