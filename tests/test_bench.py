@@ -18,6 +18,7 @@ import pytest
 import millscope as ms
 from millscope import bench, presets
 from millscope.cli import main
+from millscope.stiffness import time_step_limit
 
 from .cpu import needs_two_cores, usable_cores
 
@@ -188,7 +189,7 @@ def test_bad_options_exit_2_naming_the_option(tmp_path: Path, capsys, extra: lis
 def test_unstable_dt_is_one_line_with_the_limit(tmp_path: Path, capsys) -> None:
     assert main(_bench(tmp_path, "--dt", "1e-3", "--scenes", "balls")) == 2
     err = capsys.readouterr().err
-    limit = 0.5 * presets.pilot_mill(0.71, None, scale="tiny").min_rayleigh_time()[0]
+    limit = time_step_limit(presets.pilot_mill(0.71, None, scale="tiny")).dt
     assert err.startswith("millscope: error: --dt = 0.001 s is not valid; it must be in (0, ")
     assert f"{limit:.6g}] s" in err and err.count("\n") == 1
     assert not list(tmp_path.iterdir())

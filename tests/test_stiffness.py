@@ -205,8 +205,10 @@ def test_text_and_markdown_reports_name_every_contact_and_the_verdict() -> None:
 # -- bad input -------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(dt=-1e-5), r"dt = -1e-05 s is not valid; it must be in \(0, .*\] s, 0\.5 x the "
-                     r"Rayleigh time .* of the fraction 'balls'"),
+    (dict(dt=-1e-5), r"dt = -1e-05 s is not valid; it must be in \(0, .*\] s = 0\.312 x the "
+                     r"Rayleigh time .* of the fraction 'balls': 0\.8 x the velocity-Verlet "
+                     r"stability bound of the tangential-rotational stick mode of the contact "
+                     r"particles \(ceramic\) - drum \(steel\)"),
     (dict(dt=1.0), r"dt = 1\.0 s is not valid; it must be in \(0, "),
     (dict(dt=math.nan), r"dt = nan s is not valid"),
     (dict(sample_dt=1e-6), r"sample_dt = 1e-06 s is not valid; it must be >= the time step "

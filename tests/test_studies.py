@@ -59,27 +59,27 @@ SHORT = Setting(record_s=1.0, warm_up_s=0.5)  # the block holds 6 LTH periods an
     (lambda: StudyPlan((SHORT, SHORT)), ["settings[1]", "repeats settings[0]"]),
     (lambda: StudyPlan((SHORT, SHORT.replace(shear_modulus_factor=0.001))),
      ["settings[1]", "same cases as settings[0]"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), seeds=(3,)),
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), seeds=(3,)),
      ["StudyPlan.seeds", "(3,)", "at least 2"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), seeds=(1, 1)),
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), seeds=(1, 1)),
      ["StudyPlan.seeds", "(1, 1)"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), load_levels=(2,)),
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), load_levels=(2,)),
      ["StudyPlan.load_levels", "(2,)", "balls only"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), particles="ceramic",
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), particles="ceramic",
                        load_levels=(1, 9)), ["StudyPlan.load_levels", "1..7"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), particles="sand"),
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), particles="sand"),
      ["StudyPlan.particles", "'sand'", "'ceramic'"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), speed_fraction=1.5),
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), speed_fraction=1.5),
      ["StudyPlan.speed_fraction", "1.5", "(0, 1]"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), sample_dt=0.1),
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), sample_dt=0.1),
      ["StudyPlan.sample_dt", "0.1 s", "Nyquist"]),
     (lambda: StudyPlan((SHORT, SHORT.replace(record_s=0.5))),
      ["settings[1].record_s", "0.5 s", "LTH"]),
     (lambda: StudyPlan((SHORT, SHORT.replace(record_s=1.005))),
      ["settings[1].record_s", "1.005", "whole number of samples"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), reference=Setting()),
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), reference=Setting()),
      ["StudyPlan.reference", "one of the settings"]),
-    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.4)), threads=0),
+    (lambda: StudyPlan((SHORT, SHORT.replace(dt_fraction=0.3)), threads=0),
      ["StudyPlan.threads", "0", ">= 1"]),
     (lambda: StudyPlan.ladder("speed", [0.1, 0.2]), ["knob", "'speed'", "'dt_fraction'"]),
     (lambda: StudyPlan.ladder("dt_fraction", [0.1]), ["values", "at least 2"]),
@@ -92,7 +92,7 @@ def test_a_bad_plan_is_refused_before_any_work(make, words) -> None:
 
 
 def test_the_reference_is_the_most_expensive_setting_unless_named() -> None:
-    plan = StudyPlan.ladder("dt_fraction", [0.2, 0.05, 0.4], base=SHORT)
+    plan = StudyPlan.ladder("dt_fraction", [0.2, 0.05, 0.3], base=SHORT)
     assert plan.reference == SHORT.replace(dt_fraction=0.05)
     costs = [plan.planned_particle_steps(s) for s in plan.settings]
     assert costs[1] == max(costs)
@@ -126,19 +126,19 @@ def test_a_shear_modulus_factor_scales_the_papers_moduli_and_nothing_else() -> N
 
 def test_around_varies_one_knob_at_a_time_from_the_reference() -> None:
     ref = Setting(dt_fraction=0.1, record_s=2.0, sampling="mean")
-    plan = StudyPlan.around(ref, {"dt_fraction": [0.2, 0.4, 0.1], "sampling": ["instant"]},
-                            extra=[ref.replace(dt_fraction=0.4, sampling="instant")])
+    plan = StudyPlan.around(ref, {"dt_fraction": [0.2, 0.3, 0.1], "sampling": ["instant"]},
+                            extra=[ref.replace(dt_fraction=0.3, sampling="instant")])
     assert plan.reference == ref
-    assert plan.settings == (ref, ref.replace(dt_fraction=0.2), ref.replace(dt_fraction=0.4),
+    assert plan.settings == (ref, ref.replace(dt_fraction=0.2), ref.replace(dt_fraction=0.3),
                              ref.replace(sampling="instant"),
-                             ref.replace(dt_fraction=0.4, sampling="instant"))
+                             ref.replace(dt_fraction=0.3, sampling="instant"))
     assert len(plan.cases()) == 5 * 3  # settings x seeds (one load level)
-    combined = StudyPlan.around(ref, {"dt_fraction": [0.2, 0.4], "sampling": ["instant"],
+    combined = StudyPlan.around(ref, {"dt_fraction": [0.2, 0.3], "sampling": ["instant"],
                                       "record_s": [1.0]}, combine=True)
     # the cheapest rung of each ladder that saves steps, all at once; the sampling saves none
-    assert combined.settings[-1] == ref.replace(dt_fraction=0.4, record_s=1.0)
+    assert combined.settings[-1] == ref.replace(dt_fraction=0.3, record_s=1.0)
     assert len(combined.settings) == 6
-    one = StudyPlan.around(ref, {"dt_fraction": [0.2, 0.4]}, combine=True)
+    one = StudyPlan.around(ref, {"dt_fraction": [0.2, 0.3]}, combine=True)
     assert len(one.settings) == 3  # one knob: nothing to combine
 
 
@@ -483,7 +483,7 @@ def test_a_dt_ladder_within_the_limit_keeps_the_mean_torque_within_5_percent(tmp
 def test_a_campaign_study_compares_the_log_fit_slope(tmp_path) -> None:
     """LDMS #1 and #2 at the tiny scale, two time steps: the slope a of each seed's per-unit
     energies, and every quantity of every level, against the smaller step."""
-    plan = StudyPlan.ladder("dt_fraction", [0.1, 0.4], base=Setting(record_s=1.0, warm_up_s=0.5),
+    plan = StudyPlan.ladder("dt_fraction", [0.1, 0.3], base=Setting(record_s=1.0, warm_up_s=0.5),
                             particles="ceramic", load_levels=(1, 2), seeds=(0, 1))
     result = run_study(plan, tmp_path / "store", max_workers=min(2, usable_cores()),
                        progress=False)

@@ -37,7 +37,6 @@ from typing import TextIO
 
 from . import presets
 from ._core import build_info
-from .contact import MAX_DT_FRACTION
 from .scene import Scene
 from .simulation import (
     CHECKPOINT_FORMAT,
@@ -46,6 +45,7 @@ from .simulation import (
     check_threads,
     threads_range,
 )
+from .stiffness import time_step_limit
 
 __all__ = [
     "DEFAULT_CACHE_DIR",
@@ -379,13 +379,11 @@ def _check_dt(names: Sequence[str], scale: str, dt: float | None) -> None:
     if dt is None:
         return
     for name in names:
-        t_rayleigh, which = build_scene(name, scale).min_rayleigh_time()
-        limit = MAX_DT_FRACTION * t_rayleigh
-        if dt > limit:
+        limit = time_step_limit(build_scene(name, scale))
+        if dt > limit.dt:
             raise ValueError(
-                f"--dt = {dt:g} s is not valid; it must be in (0, {limit:.6g}] s for scene "
-                f"{name!r} at scale {scale!r} ({MAX_DT_FRACTION} x the Rayleigh time of "
-                f"{which!r})")
+                f"--dt = {dt:g} s is not valid; it must be {limit.valid_range()} (scene "
+                f"{name!r} at scale {scale!r})")
 
 
 def run(scale: str = "paper", scenes: Sequence[str] | None = None,

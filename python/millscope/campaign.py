@@ -68,12 +68,12 @@ import numpy as np
 from . import _core
 from ._files import atomic_write, read_json
 from .analysis import AnalysisSettings, analyze_block
-from .contact import DEFAULT_DT_FRACTION, MAX_DT_FRACTION
 from .presets import paper_cases
 from .record import TorqueRecord
 from .scene import Scene, _choice, _fail, _positive, _real
 from .simulation import Simulation, _available_cores
 from .spectral import spectral_energy
+from .stiffness import time_step_limit
 
 __all__ = [
     "CASE_FORMAT",
@@ -224,14 +224,12 @@ class Case:
             raise _fail("Case.scene", self.scene, "a millscope Scene")
         if not isinstance(self.settings, RunSettings):
             raise _fail("Case.settings", self.settings, "a RunSettings")
-        t_rayleigh, which = self.scene.min_rayleigh_time()
         s = self.settings
-        if s.dt is not None and s.dt > MAX_DT_FRACTION * t_rayleigh:
+        limit = time_step_limit(self.scene)
+        if s.dt is not None and s.dt > limit.dt:
             raise _fail("RunSettings.dt", s.dt,
-                        f"in (0, {MAX_DT_FRACTION * t_rayleigh:.6g}] s, {MAX_DT_FRACTION} x the "
-                        f"Rayleigh time of the fraction {which!r} of scene "
-                        f"{self.scene.name or 'scene'!r}", "s")
-        dt = DEFAULT_DT_FRACTION * t_rayleigh if s.dt is None else s.dt
+                        f"{limit.valid_range()} (scene {self.scene.name or 'scene'!r})", "s")
+        dt = limit.default_dt("RunSettings.dt") if s.dt is None else s.dt
         if s.sample_dt < dt:
             raise _fail("RunSettings.sample_dt", s.sample_dt,
                         f">= the time step dt = {dt:.6g} s of scene {self.scene.name or 'scene'!r}",

@@ -7,7 +7,7 @@ section 2).
 
 Life of a simulation::
 
-    sim = Simulation(scene, seed=0)        # checks dt against the Rayleigh time; nothing runs yet
+    sim = Simulation(scene, seed=0)        # checks dt against the stability limit; runs nothing
     rec = sim.run(14.0)                    # fills, settles, starts the drum, records 14 s
     rec2 = sim.run(2.0)                    # continues (times go on from 14 s)
     sim.save("case.ckpt"); sim = Simulation.load("case.ckpt")
@@ -52,10 +52,9 @@ from numpy.typing import NDArray
 
 from . import _checkpoint, _core
 from ._files import atomic_write
-from .contact import DEFAULT_DT_FRACTION, MAX_DT_FRACTION
 from .record import TorqueRecord
 from .scene import Scene
-from .stiffness import upper_impact_speed
+from .stiffness import time_step_limit, upper_impact_speed
 
 __all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation", "check_threads"]
 
@@ -132,8 +131,12 @@ class Simulation:
         Seed of the filling (positions and jitter); the same seed gives the same run.
     dt : float, optional
         Time step, s. Default: ``DEFAULT_DT_FRACTION`` (0.2) x the smallest Rayleigh time of the
-        charge. A step above ``MAX_DT_FRACTION`` (0.5) x that time raises ``ValueError``
-        naming the limit and the fraction that sets it.
+        charge. A step above the scene's limit (:func:`millscope.stiffness.time_step_limit`:
+        0.8 x the velocity-Verlet stability bound of the fastest damped normal or
+        tangential-rotational stick mode of its contacts at the upper impact speed, and at most
+        ``MAX_DT_FRACTION`` (0.5) x that Rayleigh time) raises ``ValueError`` naming the
+        limit, the pair of fractions and the mode that set it; so does the default when it
+        is above the limit.
     threads : int, optional
         OpenMP threads of the engine, in [1, the cores this process may use] (else
         ``ValueError``, see :func:`check_threads`); default: all those cores. Runs are
@@ -160,15 +163,8 @@ class Simulation:
             raise TypeError(f"scene must be a millscope Scene, not {type(scene).__name__}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ValueError(f"seed = {seed!r} is not valid; it must be an integer >= 0")
-        t_rayleigh, which = scene.min_rayleigh_time()
-        limit = MAX_DT_FRACTION * t_rayleigh
-        if dt is None:
-            dt = DEFAULT_DT_FRACTION * t_rayleigh
-        elif not (math.isfinite(dt) and 0.0 < dt <= limit):
-            raise ValueError(
-                f"dt = {dt!r} s is not valid; it must be in (0, {limit:.6g}] s, "
-                f"{MAX_DT_FRACTION} x the Rayleigh time {t_rayleigh:.6g} s of the fraction "
-                f"{which!r}, the stiffest in the charge")
+        limit = time_step_limit(scene)
+        dt = limit.default_dt() if dt is None else limit.check(dt)
         threads = _available_cores() if threads is None else check_threads(threads)
         if skin is not None and not (math.isfinite(skin) and skin > 0.0):
             raise ValueError(f"skin = {skin!r} m is not valid; it must be finite and > 0")

@@ -48,6 +48,13 @@ speed a particle can reach, a fall across the drum onto a lifter moving at the r
 
 :func:`advise_stiffness` takes the speed as ``impact_speed`` when the caller knows better.
 
+**The largest time step.** :func:`time_step_limit` takes, over the same contacts at v_max, the
+smallest velocity-Verlet stability bound of their damped normal and tangential-rotational stick
+modes (:func:`millscope.contact.contact_modes`, :func:`millscope.contact.verlet_stability_bound`),
+times the safety factor :data:`millscope.contact.DT_SAFETY_FACTOR`, and at most the engine's
+cap of MAX_DT_FRACTION Rayleigh times. :class:`~millscope.Simulation`, campaigns, the benchmark
+and the advisor refuse a step above it, naming the pair and the mode.
+
 Lives beside :mod:`millscope.contact` rather than in it: it reads a :class:`~millscope.scene.Scene`
 (fractions, pairs, drum, speed) and sampling settings, while ``contact`` is the contact law on
 its own and is imported by ``scene``.
@@ -62,8 +69,11 @@ from numbers import Real
 
 from .contact import (
     DEFAULT_DT_FRACTION,
+    DT_SAFETY_FACTOR,
     MAX_DT_FRACTION,
+    ContactMode,
     PairProperties,
+    contact_modes,
     hertz_contact_time,
     hertz_max_overlap,
     hertz_stability_dt,
@@ -74,14 +84,18 @@ from .scene import Fraction, Scene
 
 __all__ = [
     "ContactAdvice",
+    "PairLimit",
     "StiffnessAdvice",
     "StiffnessWarning",
+    "TimeStepLimit",
     "advise_stiffness",
     "expected_impact_speed",
+    "time_step_limit",
     "upper_impact_speed",
 ]
 
 WALL = "wall"  # the name of the drum in pair labels
+DRUM = "drum"  # the name of the drum in the time-step limit's pair labels
 
 
 class StiffnessWarning(UserWarning):
@@ -305,6 +319,164 @@ def upper_impact_speed(scene: Scene) -> float:
     return math.sqrt(2.0 * scene.gravity * scene.drum.diameter) + scene.omega * scene.drum.radius
 
 
+# -- the largest stable time step -------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PairLimit:
+    """The fastest modes of one kind of contact at the scene's upper impact speed.
+
+    Attributes
+    ----------
+    label : str
+        ``"<fraction> (<material>) - <fraction> (<material>)"``, or ``"... - drum (<material>)"``.
+    modes : tuple of ContactMode
+        The damped normal mode and, with friction, the stick mode
+        (:func:`millscope.contact.contact_modes`).
+    """
+
+    label: str
+    modes: tuple[ContactMode, ...]
+
+    @property
+    def fastest(self) -> ContactMode:
+        """The mode of the smallest stability bound."""
+        return min(self.modes, key=lambda m: m.stability_dt)
+
+    @property
+    def dt(self) -> float:
+        """DT_SAFETY_FACTOR x the fastest mode's stability bound (S3), s."""
+        return DT_SAFETY_FACTOR * self.fastest.stability_dt
+
+
+@dataclass(frozen=True)
+class TimeStepLimit:
+    """The largest time step a scene accepts, and what sets it (:func:`time_step_limit`).
+
+    Attributes
+    ----------
+    dt : float
+        The limit, s: the smaller of ``modal_dt`` and ``rayleigh_bound``.
+    pair : str
+        Label of the limiting contact (:class:`PairLimit`).
+    mode : ContactMode
+        Its fastest mode.
+    modal_dt : float
+        DT_SAFETY_FACTOR x that mode's stability bound, s.
+    rayleigh_time : float
+        Smallest Rayleigh time of the charge (A1), s.
+    rayleigh_fraction : str
+        The fraction that has it.
+    speed : float
+        The upper impact speed the modes are evaluated at (A6), m/s.
+    pairs : tuple of PairLimit
+        Every pair of fractions, then every fraction against the drum.
+    """
+
+    dt: float
+    pair: str
+    mode: ContactMode
+    modal_dt: float
+    rayleigh_time: float
+    rayleigh_fraction: str
+    speed: float
+    pairs: tuple[PairLimit, ...]
+
+    @property
+    def rayleigh_ratio(self) -> float:
+        """modal_dt / rayleigh_time: the modal limit in Rayleigh times."""
+        return self.modal_dt / self.rayleigh_time
+
+    @property
+    def rayleigh_bound(self) -> float:
+        """MAX_DT_FRACTION x rayleigh_time, s: the engine's own cap (``timestep.hpp``)."""
+        return MAX_DT_FRACTION * self.rayleigh_time
+
+    @property
+    def by_rayleigh(self) -> bool:
+        """Whether the Rayleigh cap, not a contact mode, sets ``dt``."""
+        return self.rayleigh_bound <= self.modal_dt
+
+    def valid_range(self) -> str:
+        """``"in (0, <dt>] s, ..."``: the valid range of a step and what sets it, for messages."""
+        where = f"the Rayleigh time {self.rayleigh_time:.6g} s of the fraction " \
+                f"{self.rayleigh_fraction!r}"
+        if self.by_rayleigh:
+            return (f"in (0, {self.dt:.6g}] s, {MAX_DT_FRACTION} x {where}, the stiffest in "
+                    "the charge")
+        m = self.mode
+        return (f"in (0, {self.dt:.6g}] s = {self.rayleigh_ratio:.3g} x {where}: "
+                f"{DT_SAFETY_FACTOR} x the velocity-Verlet stability bound of the {m.name} mode "
+                f"of the contact {self.pair} at the upper impact speed {self.speed:.3g} m/s "
+                f"(w0 = {m.angular_frequency:.4g} rad/s, zeta = {m.damping_ratio:.3g})")
+
+    def check(self, dt: object, name: str = "dt") -> float:
+        """``dt`` as float if finite and in (0, self.dt], else ValueError naming ``name``, the
+        value, the limit, the pair and the mode."""
+        ok = isinstance(dt, Real) and not isinstance(dt, bool)
+        x = float(dt) if ok else math.nan  # type: ignore[arg-type]
+        if not (math.isfinite(x) and 0.0 < x <= self.dt):
+            raise ValueError(f"{name} = {dt!r} s is not valid; it must be {self.valid_range()}")
+        return x
+
+    def default_dt(self, name: str = "dt") -> float:
+        """The default step, DEFAULT_DT_FRACTION x rayleigh_time, s; ValueError when it is
+        above the limit (a scene whose contacts need a smaller step must be given one)."""
+        default = DEFAULT_DT_FRACTION * self.rayleigh_time
+        if default > self.dt:
+            raise ValueError(f"{name} = None (the default, {DEFAULT_DT_FRACTION} x the Rayleigh "
+                             f"time = {default:.6g} s) is not valid for this scene; give a "
+                             f"step {self.valid_range()}")
+        return default
+
+
+def time_step_limit(scene: Scene) -> TimeStepLimit:
+    """The largest time step the engine integrates a scene's contacts stably with.
+
+    For every pair of fractions and every fraction against the drum (a flat wall of the
+    drum's material), the damped normal mode and, with friction, the tangential stick mode
+    coupled with rotation are linearised at the largest overlap of an elastic impact at the
+    upper impact speed v_max (A6) (:func:`millscope.contact.contact_modes`, eqs. M1-M2); each
+    mode of angular frequency w0 and damping ratio zeta is stable for
+    dt < verlet_stability_bound(zeta) / w0 (S3). The limit is DT_SAFETY_FACTOR (0.8, justified
+    in :mod:`millscope.contact`) x the smallest such bound, and never above the engine's cap
+    MAX_DT_FRACTION (0.5) x the smallest Rayleigh time.
+
+    With the paper's moduli the cap sets the limit (the modal one is 0.55-0.66 Rayleigh times
+    for the presets); with the moduli x 0.001 ("tiny", "soft") the stick mode does (0.28-0.33
+    Rayleigh times, 0.31 for the balls-only mill at 71 % of critical).
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Returns
+    -------
+    TimeStepLimit
+    """
+    _require_scene(scene)
+    t_rayleigh, stiffest = scene.min_rayleigh_time()
+    speed = upper_impact_speed(scene)
+    pairs = tuple(_pair_limit(scene, a, b, speed) for a, b in _contact_kinds(scene))
+    worst = min(pairs, key=lambda p: p.dt)
+    dt = min(worst.dt, MAX_DT_FRACTION * t_rayleigh)
+    return TimeStepLimit(dt=dt, pair=worst.label, mode=worst.fastest, modal_dt=worst.dt,
+                         rayleigh_time=t_rayleigh, rayleigh_fraction=stiffest, speed=speed,
+                         pairs=pairs)
+
+
+def _pair_limit(scene: Scene, a: Fraction, b: Fraction | None, speed: float) -> PairLimit:
+    """One contact kind's modes; b None is the drum."""
+    mat_a = scene.material(a.material)
+    mat_b = scene.material(scene.drum.material if b is None else b.material)
+    coeff = scene.pair(a.material, mat_b.name)
+    other = DRUM if b is None else b.name
+    label = f"{a.name} ({mat_a.name}) - {other} ({mat_b.name})"
+    return PairLimit(label, contact_modes(mat_a, mat_b, a.diameter,
+                                          None if b is None else b.diameter, speed,
+                                          coeff.restitution, coeff.friction))
+
+
 # -- the advisor -------------------------------------------------------------------------------
 
 
@@ -317,8 +489,8 @@ def advise_stiffness(scene: Scene, *, dt: float | None = None, sample_dt: float 
     ----------
     scene : Scene
     dt : float, optional
-        Time step, s, in (0, MAX_DT_FRACTION x the smallest Rayleigh time]; default
-        DEFAULT_DT_FRACTION x that time (the engine's default).
+        Time step, s, in (0, the scene's limit] (:func:`time_step_limit`, as the engine);
+        default DEFAULT_DT_FRACTION x the smallest Rayleigh time (the engine's default).
     sample_dt : float
         Torque sampling interval, s, >= dt (0.01 s in the paper).
     analysis_band_hz : float, optional
@@ -343,13 +515,8 @@ def advise_stiffness(scene: Scene, *, dt: float | None = None, sample_dt: float 
     """
     _require_scene(scene)
     t_rayleigh, stiffest = scene.min_rayleigh_time()
-    limit = MAX_DT_FRACTION * t_rayleigh
-    if dt is None:
-        dt = DEFAULT_DT_FRACTION * t_rayleigh
-    else:
-        dt = _in_range("dt", dt, "s", 0.0, limit,
-                       f"in (0, {limit:.6g}] s, {MAX_DT_FRACTION} x the Rayleigh time "
-                       f"{t_rayleigh:.6g} s of the fraction {stiffest!r}")
+    limit = time_step_limit(scene)
+    dt = limit.default_dt() if dt is None else limit.check(dt)
     sample_dt = _in_range("sample_dt", sample_dt, "s", dt, math.inf,
                           f">= the time step dt = {dt:.6g} s", low_open=False)
     nyquist = 0.5 / sample_dt

@@ -26,7 +26,7 @@ progress bar as there; each case is analysed as the campaign analyses its cases,
 :meth:`~millscope.campaign.CaseResult.from_record`), one case per setting, load level and seed::
 
     from millscope.studies import Setting, StudyPlan, run_study
-    plan = StudyPlan.ladder("dt_fraction", [0.05, 0.1, 0.2, 0.4], seeds=(0, 1, 2))
+    plan = StudyPlan.ladder("dt_fraction", [0.05, 0.1, 0.2, 0.3], seeds=(0, 1, 2))
     result = run_study(plan, "out/dt-study/store")
     result.to_csv("out/dt-study/accuracy.csv"); print(result.to_markdown())
     result.pareto("energy")               # the settings no other beats in both cost and error
@@ -108,8 +108,10 @@ class Setting:
     Attributes
     ----------
     dt_fraction : float
-        Time step / the smallest Rayleigh time of the charge, in (0, 0.5] (the engine's
-        stability limit); the engine's default is 0.2. Issue range: 0.05 to 0.5.
+        Time step / the smallest Rayleigh time of the charge, in (0, 0.5] (the engine's cap);
+        the engine's default is 0.2. A case whose contacts set a lower limit is refused when
+        the plan is built (:func:`millscope.stiffness.time_step_limit`: about 0.3 at the
+        ``"tiny"`` scale). Issue range: 0.05 to 0.5.
     shear_modulus_factor : float or None
         Every material's shear modulus as a fraction of the paper's (Table 2), in (0, 1]; None
         keeps the scale's own (1 at ``"paper"``, 0.01 at ``"small"``, 0.001 at ``"tiny"`` and
@@ -140,7 +142,7 @@ class Setting:
         if not 0.0 < dt <= MAX_DT_FRACTION:
             raise _fail("Setting.dt_fraction", self.dt_fraction,
                         f"in (0, {MAX_DT_FRACTION:g}] (time step / Rayleigh time; "
-                        f"{MAX_DT_FRACTION:g} is the engine's stability limit)")
+                        f"{MAX_DT_FRACTION:g} is the engine's cap)")
         g = self.shear_modulus_factor
         if g is not None:
             valid = "in (0, 1] (a fraction of the paper's shear moduli) or None (the scale's own)"

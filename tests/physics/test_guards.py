@@ -19,7 +19,7 @@ import millscope as ms
 from millscope import _core
 from millscope.contact import MAX_DT_FRACTION
 from millscope.simulation import MAX_OVERLAP_FRACTION, SPEED_BOUND_FACTOR
-from millscope.stiffness import upper_impact_speed
+from millscope.stiffness import time_step_limit, upper_impact_speed
 
 from .test_engine import STEEL, make_engine
 
@@ -201,12 +201,19 @@ def test_the_speed_bound_of_a_scene() -> None:
 
 
 def test_a_time_step_above_the_limit_is_refused_before_anything_runs() -> None:
-    scene = ms.presets.pilot_mill(0.71, None, scale="tiny")
-    t_r = scene.min_rayleigh_time()[0]
+    paper = ms.presets.pilot_mill(0.71, None, scale="paper")
+    t_r = paper.min_rayleigh_time()[0]
     with pytest.raises(ValueError, match=rf"dt = .* s is not valid; it must be in \(0, "
                        rf"{MAX_DT_FRACTION * t_r:.6g}\] s, {MAX_DT_FRACTION} x the Rayleigh "
                        r"time"):
-        ms.Simulation(scene, dt=1.01 * MAX_DT_FRACTION * t_r)
+        ms.Simulation(paper, dt=1.01 * MAX_DT_FRACTION * t_r)
+    # at the reduced moduli the stick mode of the balls' contacts sets a lower limit
+    scene = ms.presets.pilot_mill(0.71, None, scale="tiny")
+    limit = time_step_limit(scene).dt
+    with pytest.raises(ValueError, match=rf"dt = .* s is not valid; it must be in \(0, "
+                       rf"{limit:.6g}\] s = .* tangential-rotational stick mode of the contact "
+                       r"balls \(steel\) - balls \(steel\)"):
+        ms.Simulation(scene, dt=1.01 * limit)
 
 
 @pytest.mark.parametrize("scale, deepest_seen", [("small", 0.15), ("tiny", 0.5)])
