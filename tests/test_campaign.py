@@ -389,8 +389,8 @@ def test_results_before_running_and_a_damaged_file_are_pending(tmp_path: Path) -
     camp.case_file(0).write_bytes(b"PK\x03\x04 not a whole file")
     damaged = camp.results()[0]
     assert damaged.status == "pending"  # the next run computes it again
-    assert damaged.error == (f"unreadable case file cases/{camp.hashes[0]}.npz: not a valid "
-                             "case file (BadZipFile: File is not a zip file)")
+    assert damaged.error == (f"unreadable case file cases/{camp.hashes[0]}.npz: not a "
+                             "millscope record (BadZipFile: File is not a zip file)")
 
 
 def test_a_case_file_with_nan_torque_is_computed_again(tmp_path: Path) -> None:

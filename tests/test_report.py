@@ -183,9 +183,9 @@ def _damage(path: Path, kind: str) -> None:
 
 DAMAGE = {  # kind: what the reason must say
     "truncated": "BadZipFile", "flipped": "CRC", "empty": "an empty file",
-    "directory": "a directory", "no meta": "no meta_json", "nan torque": "not finite",
+    "directory": "a directory", "no meta": "no 'meta_json' array", "nan torque": "not finite",
     "missing": "missing, although manifest.json lists the case as done",
-    "huge header": "torque_Nm.npy declares 100000000000 values of float64"}
+    "huge header": "torque_Nm.npy claims shape (100000000000,)"}
 
 
 @pytest.mark.parametrize("kind", list(DAMAGE))

@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ._files import read_npy_header
 from .contact import MAX_DT_FRACTION
 from .scene import Scene
 
@@ -112,15 +113,9 @@ def read_npy(zf: zipfile.ZipFile, info: zipfile.ZipInfo, dtype: np.dtype[Any],
     name = info.filename.removesuffix(".npy")
     with zf.open(info) as f:
         try:
-            version = np.lib.format.read_magic(f)
-            if version == (1, 0):
-                shape, fortran, found = np.lib.format.read_array_header_1_0(f)
-            elif version == (2, 0):
-                shape, fortran, found = np.lib.format.read_array_header_2_0(f)
-            else:
-                raise Refused(f"{name} is a .npy of format {version}; it must be 1.0 or 2.0")
-        except (ValueError, SyntaxError, EOFError) as exc:
-            raise Refused(f"{name} has no readable .npy header ({exc})") from None
+            shape, fortran, found = read_npy_header(f)
+        except ValueError as exc:
+            raise Refused(f"{name} has {exc}") from None
         if found != dtype or found.hasobject:
             raise _refuse(f"the dtype of {name}", str(found), f"{dtype} (as saved)")
         if len(shape) != ndim:
@@ -142,14 +137,9 @@ def read_meta(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> dict[str, Any]:
 
     with zf.open(info) as f:
         try:
-            version = np.lib.format.read_magic(f)
-            read = {(1, 0): np.lib.format.read_array_header_1_0,
-                    (2, 0): np.lib.format.read_array_header_2_0}.get(version)
-            if read is None:
-                raise Refused(f"meta_json is a .npy of format {version}; it must be 1.0 or 2.0")
-            shape, _, dtype = read(f)
-        except (ValueError, SyntaxError, EOFError) as exc:
-            raise Refused(f"meta_json has no readable .npy header ({exc})") from None
+            shape, _, dtype = read_npy_header(f)
+        except ValueError as exc:
+            raise Refused(f"meta_json has {exc}") from None
     if dtype.kind != "U" or shape != () or dtype.itemsize > 4 * MAX_META_CHARS:
         raise _refuse("meta_json", f"{dtype} {shape}",
                       f"one string of at most {MAX_META_CHARS} characters")

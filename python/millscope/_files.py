@@ -11,6 +11,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
+import numpy as np
+
 
 def _new_file_mode() -> int:
     """0o666 less the process umask, the mode ``open()`` would give a new file."""
@@ -53,3 +55,19 @@ def read_json(path: str | os.PathLike[str], what: str) -> Any:
         raise ValueError(f"{source}: no such {what} file") from None
     except json.JSONDecodeError as exc:
         raise ValueError(f"{source}: not valid JSON ({exc})") from None
+
+
+def read_npy_header(fp: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
+    """(shape, fortran_order, dtype) from the header of a ``.npy`` stream, read before its
+    data so that a caller can check what the header claims before allocating it. A format
+    other than 1.0 or 2.0, or a header that does not parse, raises ValueError."""
+    try:
+        version = np.lib.format.read_magic(fp)
+        read = {(1, 0): np.lib.format.read_array_header_1_0,
+                (2, 0): np.lib.format.read_array_header_2_0}.get(version)
+        if read is None:
+            raise ValueError(f"npy format {version}; 1.0 or 2.0 is read")
+        shape, fortran, dtype = read(fp)
+    except (SyntaxError, EOFError) as exc:
+        raise ValueError(f"no readable npy header ({exc})") from None
+    return tuple(shape), bool(fortran), dtype

@@ -56,7 +56,6 @@ import threading
 import time
 import traceback
 import types
-import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from numbers import Integral
@@ -69,7 +68,7 @@ from . import _core
 from ._files import atomic_write, read_json
 from .analysis import AnalysisSettings, analyze_block
 from .presets import paper_cases
-from .record import TorqueRecord
+from .record import RecordError, TorqueRecord
 from .scene import Scene, _choice, _fail, _positive, _real
 from .simulation import Simulation, _available_cores
 from .spectral import spectral_energy
@@ -463,30 +462,16 @@ def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
     hashes to the file's name and the number of samples its settings give.
     """
     try:
-        if path.is_dir():
-            raise _Unreadable("a directory, not a case file")
-        if path.stat().st_size == 0:
-            raise _Unreadable("an empty file")
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
-            missing = [name for name in ("time_s", "torque_Nm", "meta_json")
-                       if name not in data.files]
-            if missing:
-                raise _Unreadable(f"no {' or '.join(missing)} in the file")
-            for name in ("time_s", "torque_Nm", "meta_json"):
-                _check_declared_size(data.zip, f"{name}.npy")
-            arrays = {name: data[name] for name in ("time_s", "torque_Nm")}
-            meta = json.loads(str(data["meta_json"]))
-        for name, values in arrays.items():
-            if values.dtype.kind not in "fiu":
-                raise _Unreadable(f"{name} holds {values.dtype} values, not real numbers")
-        if not isinstance(meta, dict) or not isinstance(meta.get("campaign"), dict):
+        record = TorqueRecord.load(path)  # every check of a record file (record.py)
+        info = record.meta.get("campaign")
+        if not isinstance(info, dict):
             raise _Unreadable('its meta holds no "campaign" mapping')
-        info: dict[str, Any] = meta["campaign"]
-        record = TorqueRecord(arrays["time_s"], arrays["torque_Nm"], meta)
-        case = Case.from_dict(info.get("case"))  # type: ignore[arg-type]
+        case = Case.from_dict(info.get("case"))
     except _Unreadable:
         raise
-    except (OSError, KeyError, TypeError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+    except RecordError as exc:  # its message starts with the path, which the caller names
+        raise _Unreadable(str(exc).removeprefix(f"{path}: ")) from None
+    except (OSError, KeyError, TypeError, ValueError) as exc:
         raise _Unreadable(f"not a valid case file ({_one_line(exc)})") from None
     if case.hash() != path.stem:
         raise _Unreadable(f"it holds case {case.hash()[:12]}, not the one its name says")
@@ -494,23 +479,6 @@ def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
     if len(record) != expected:
         raise _Unreadable(f"it holds {len(record)} samples; its case gives {expected}")
     return info, record
-
-
-def _check_declared_size(archive: zipfile.ZipFile, member: str) -> None:
-    """Raises :class:`_Unreadable` when the ``.npy`` header of ``member`` declares more values
-    than the member holds, before numpy would allocate them."""
-    with archive.open(member) as fh:
-        version = np.lib.format.read_magic(fh)
-        if version == (1, 0):
-            shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
-        elif version == (2, 0):
-            shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
-        else:
-            raise _Unreadable(f"{member} has .npy format {version}, not 1.0 or 2.0")
-    needed = math.prod(shape) * dtype.itemsize
-    if needed > archive.getinfo(member).file_size:
-        raise _Unreadable(f"{member} declares {math.prod(shape)} values of {dtype} "
-                          f"({needed} bytes) but holds {archive.getinfo(member).file_size} bytes")
 
 
 def _open_failed(path: Path) -> dict[str, Any]:

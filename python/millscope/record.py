@@ -32,7 +32,7 @@ from typing import IO, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._files import atomic_write
+from ._files import atomic_write, read_npy_header
 from ._samples import RecordError, bad_option, check_samples, real_option, step_jitter
 from ._torque_csv import CsvOptions, parse_meta, read_torque_csv
 
@@ -86,13 +86,10 @@ def _npz_member(archive: zipfile.ZipFile, key: str, where: str) -> NDArray[Any]:
                           f"{archive.namelist()[:5]}; a record holds time_s, torque_Nm and "
                           "meta_json, a JSON object as text)") from None
     with archive.open(info) as fp:
-        version = np.lib.format.read_magic(fp)
-        if version == (1, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fp)
-        elif version == (2, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fp)
-        else:
-            raise RecordError(f"{where}: {key}.npy has npy format {version}; 1.0 or 2.0 is read")
+        try:
+            shape, fortran, dtype = read_npy_header(fp)
+        except ValueError as exc:
+            raise RecordError(f"{where}: {key}.npy has {exc}") from None
         size = info.file_size - fp.tell()
         count = math.prod(shape)
         wanted = "a text (meta_json)" if key == "meta_json" else "real numbers"
