@@ -19,8 +19,10 @@ def cpu_flags() -> set[str]:
 
 
 def runs_wide_pair_search() -> bool:
-    """Whether the engine's AVX-512 pair search (touching_pairs.hpp) can run here."""
-    return {"avx512f", "avx512vl"} <= cpu_flags()
+    """Whether the engine's AVX-512 pair search (touching_pairs.hpp) runs here: the CPU has it
+    and MILLSCOPE_NO_WIDE_PAIRS does not turn it off."""
+    turned_off = os.environ.get("MILLSCOPE_NO_WIDE_PAIRS", "") not in ("", "0")
+    return {"avx512f", "avx512vl"} <= cpu_flags() and not turned_off
 
 
 def usable_cores() -> int:

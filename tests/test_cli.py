@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -24,6 +25,8 @@ def csv_record(tmp_path):
 
 WIDE_LINE = "pair search       AVX-512, 8 listed pairs at a time"
 PORTABLE_LINE = "pair search       portable, one listed pair at a time (no AVX-512 F and VL here)"
+TURNED_OFF_LINE = ("pair search       portable, one listed pair at a time (turned off by "
+                   "MILLSCOPE_NO_WIDE_PAIRS)")
 
 
 def test_info_runs_as_a_module() -> None:
@@ -33,7 +36,23 @@ def test_info_runs_as_a_module() -> None:
                          text=True, check=True).stdout
     assert "FFTW" in out and "fftw-3" in out and "OpenMP" in out and "threads" in out
     search = next(line for line in out.splitlines() if line.startswith("pair search"))
-    assert search == (WIDE_LINE if runs_wide_pair_search() else PORTABLE_LINE)
+    turned_off = os.environ.get("MILLSCOPE_NO_WIDE_PAIRS", "") not in ("", "0")
+    assert search == (WIDE_LINE if runs_wide_pair_search() else
+                      TURNED_OFF_LINE if turned_off else PORTABLE_LINE)
+
+
+def test_the_wide_search_can_be_turned_off_on_any_host() -> None:
+    """MILLSCOPE_NO_WIDE_PAIRS=1 gives the portable search on every CPU: `info` says so and an
+    engine built under it does not take the wide search (so the suite can be run with it)."""
+    code = ("import millscope._core as c; import sys; "
+            "sys.stdout.write(str(c.build_info()['wide_pair_search']))")
+    env = dict(os.environ, MILLSCOPE_NO_WIDE_PAIRS="1")
+    off = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env=env).stdout
+    assert off == "False"
+    out = subprocess.run([sys.executable, "-m", "millscope", "info"], capture_output=True,
+                         text=True, check=True, env=env).stdout
+    assert TURNED_OFF_LINE in out.splitlines()
 
 
 @pytest.mark.parametrize("wide, line", [(True, WIDE_LINE), (False, PORTABLE_LINE)])

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import warnings
 from collections.abc import Callable, Sequence
@@ -63,8 +64,11 @@ def cmd_info(_: argparse.Namespace) -> int:
     print(f"OpenMP            {info['openmp_version']}, {info['openmp_max_threads']} threads")
     print(f"FFTW              {info['fftw_version']}")
     print(f"Eigen             {info['eigen_version']}")
+    turned_off = os.environ.get("MILLSCOPE_NO_WIDE_PAIRS", "") not in ("", "0")
     search = ("AVX-512, 8 listed pairs at a time" if info["wide_pair_search"]
-              else "portable, one listed pair at a time (no AVX-512 F and VL here)")
+              else "portable, one listed pair at a time (" +
+              ("turned off by MILLSCOPE_NO_WIDE_PAIRS" if turned_off
+               else "no AVX-512 F and VL here") + ")")
     print(f"pair search       {search}")
     return 0
 

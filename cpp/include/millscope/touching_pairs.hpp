@@ -17,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define MILLSCOPE_WIDE_PAIRS 1
@@ -63,9 +64,13 @@ struct PartnerPrefetch {
   static constexpr std::uint32_t pair_ahead = 256;   // listed pairs
 };
 
-/// Whether this build and this CPU run touching_pairs_wide.
+/// Whether this build and this CPU run touching_pairs_wide. Setting the environment variable
+/// MILLSCOPE_NO_WIDE_PAIRS (to anything but "" or "0") turns it off, so that the portable
+/// search can be run and tested on a CPU that has AVX-512.
 inline bool wide_pairs_supported() {
 #if MILLSCOPE_WIDE_PAIRS
+  const char* off = std::getenv("MILLSCOPE_NO_WIDE_PAIRS");
+  if (off != nullptr && off[0] != '\0' && !(off[0] == '0' && off[1] == '\0')) return false;
   return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
 #else
   return false;
