@@ -778,11 +778,28 @@ void Engine::Access::split_rows(Engine& e) {
   }
 }
 
+namespace {
+/// When a guard stopped the run, on the time axis of the record: since the start of rotation
+/// (a record's t), or since filling while the charge settles.
+std::string when(const Engine& e) {
+  std::ostringstream text;
+  text.precision(6);
+  const long start = e.rotation_start_step();
+  if (start >= 0) {
+    text << "t = " << static_cast<double>(e.step_count() - start) * e.dt()
+         << " s since the start of rotation, the record's time";
+  } else {
+    text << "during settling, t = " << e.time() << " s since filling";
+  }
+  return text.str();
+}
+}  // namespace
+
 std::string Engine::Access::describe_bad(const Engine& e, std::size_t i) {
   std::ostringstream msg;
   msg.precision(6);
   const double rho = std::hypot(e.x_[i], e.y_[i]);
-  msg << "the simulation stopped at step " << e.step_ << " (t = " << e.time() << " s): particle "
+  msg << "the simulation stopped at step " << e.step_ << " (" << when(e) << "): particle "
       << e.order_[i] << " (radius " << e.r_[i] << " m, material " << static_cast<int>(e.mat_[i]) << ") ";
   const double values[] = {e.x_[i], e.y_[i], e.z_[i], e.vx_[i], e.vy_[i], e.vz_[i],
                            e.fx_[i], e.fy_[i], e.fz_[i]};
@@ -811,7 +828,7 @@ std::string Engine::Access::describe_overlap(const Engine& e, std::size_t i, dou
                                              bool wall) {
   std::ostringstream msg;
   msg.precision(6);
-  msg << "the simulation stopped at step " << e.step_ << " (t = " << e.time() << " s): particle "
+  msg << "the simulation stopped at step " << e.step_ << " (" << when(e) << "): particle "
       << e.order_[i] << " (radius " << e.r_[i] << " m, material " << static_cast<int>(e.mat_[i])
       << ") overlaps " << (wall ? "the drum" : "another particle") << " by " << ratio
       << " of the " << (wall ? "particle's" : "smaller") << " radius, above the limit of "

@@ -466,7 +466,7 @@ def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
         info = record.meta.get("campaign")
         if not isinstance(info, dict):
             raise _Unreadable('its meta holds no "campaign" mapping')
-        case = Case.from_dict(info.get("case"))
+        case = Case.from_dict(info.get("case"))  # type: ignore[arg-type]
     except _Unreadable:
         raise
     except RecordError as exc:  # its message starts with the path, which the caller names

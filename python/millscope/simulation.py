@@ -36,7 +36,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import re
 import signal
 import threading
 import warnings
@@ -637,51 +636,13 @@ def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
     geometry = _core.DrumGeometry(**geometry_args)
     restitution, friction = scene.pair_matrices()
     materials = [_core.Material(m.density, m.shear_modulus, m.poisson) for m in scene.materials]
-    return _GuardedEngine(materials, restitution, friction, scene.material_index(drum.material),
-                          geometry, scene.particle_radii(), scene.particle_materials(), dt,
-                          gravity=scene.gravity, skin=0.0 if skin is None else skin,
-                          clamp_normal=scene.clamp_normal_force, threads=threads,
-                          track_energy=track_energy,
-                          max_speed=SPEED_BOUND_FACTOR * upper_impact_speed(scene),
-                          max_overlap=MAX_OVERLAP_FRACTION)
-
-
-_GUARD_WHERE = re.compile(r"stopped at step (\d+) \(t = [^)]* s\)")
-
-
-class _GuardedEngine(_core.Engine):  # type: ignore[misc]
-    """The engine, with its guard messages (a run stopped by the speed, overlap or state
-    guards) on the record's time axis: the engine counts time from the filling, a record from
-    the start of rotation (:attr:`Simulation.time`)."""
-
-    def advance(self, *args: Any, **kwargs: Any) -> None:
-        try:
-            super().advance(*args, **kwargs)
-        except RuntimeError as exc:
-            raise self._on_record_time(exc) from None
-
-    def advance_sampled(self, *args: Any, **kwargs: Any) -> Any:
-        try:
-            return super().advance_sampled(*args, **kwargs)
-        except RuntimeError as exc:
-            raise self._on_record_time(exc) from None
-
-    def _on_record_time(self, exc: RuntimeError) -> RuntimeError:
-        """The guard's message with the time of its step on the record's axis (since the start
-        of rotation), or said to be during settling (since filling) before rotation."""
-        message = str(exc)
-        found = _GUARD_WHERE.search(message)
-        if found is None:
-            return exc
-        step = int(found.group(1))
-        start = int(self.rotation_start_step)
-        if start >= 0:
-            where = (f"stopped at step {step} (t = {(step - start) * self.dt:.6g} s since the "
-                     "start of rotation, the record's time)")
-        else:
-            where = (f"stopped at step {step} (during settling, t = {step * self.dt:.6g} s since "
-                     "filling)")
-        return type(exc)(message[:found.start()] + where + message[found.end():])
+    return _core.Engine(materials, restitution, friction, scene.material_index(drum.material),
+                        geometry, scene.particle_radii(), scene.particle_materials(), dt,
+                        gravity=scene.gravity, skin=0.0 if skin is None else skin,
+                        clamp_normal=scene.clamp_normal_force, threads=threads,
+                        track_energy=track_energy,
+                        max_speed=SPEED_BOUND_FACTOR * upper_impact_speed(scene),
+                        max_overlap=MAX_OVERLAP_FRACTION)
 
 
 def _fill_positions(scene: Scene, rng: np.random.Generator) -> NDArray[np.float64]:

@@ -26,7 +26,8 @@ from .test_engine import STEEL, make_engine
 R = 0.0125  # m, the paper's 25 mm balls
 MID = 0.1575  # m, the middle of the drum along its axis (it spans 0 <= z <= 0.315 m)
 # what every guard message holds: where the run stopped, which particle, its state, a hint
-WHERE = r"stopped at step \d+ \(t = [-+0-9.e]+ s\): particle (\d+) \(radius 0.0125 m"
+WHERE = (r"stopped at step \d+ \((?:during settling, )?t = [-+0-9.e]+ s since [^)]*\): "
+         r"particle (\d+) \(radius 0.0125 m")
 STATE = r"position [-+0-9.e]+, [-+0-9.e]+, [-+0-9.e]+ m; velocity "
 
 
