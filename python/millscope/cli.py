@@ -262,15 +262,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def cmd_advise(args: argparse.Namespace) -> int:
     """Stiffness advice for a preset case or a scene file (millscope.stiffness)."""
-    import json
-
     from .presets import pilot_mill
     from .scene import Scene
     from .stiffness import StiffnessWarning, advise_stiffness
 
     if args.scene is not None:
-        with open(args.scene, encoding="utf-8") as f:
-            scene = Scene.from_dict(json.load(f))
+        scene = Scene.load(args.scene)
     else:
         particles = None if args.particles == "none" else args.particles
         scene = pilot_mill(args.speed, particles, args.level, args.scale)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from numbers import Integral
 from typing import Literal
 
 import numpy as np
@@ -33,6 +34,7 @@ __all__ = [
     "spectral_energy",
     "band_stop",
     "LTH_CLEAR_BINS",
+    "MAX_LIFTERS",
 ]
 
 WindowName = Literal["hann", "hann_periodic", "rectangular"]
@@ -45,6 +47,8 @@ _WINDOWS = ("hann", "hann_periodic", "rectangular")
 #: of lifters x rotation frequency, to lie clear of the mean's main lobe (2 bins with the Hann
 #: window) with a bin to spare.
 LTH_CLEAR_BINS = 6.0
+#: The most lifter bars a drum may have (a bar every 3 mm of the shell of a 10 m drum).
+MAX_LIFTERS = 10_000
 
 
 def _samples(data: Samples, sample_rate_hz: float | None) -> tuple[NDArray[np.float64], float]:
@@ -154,12 +158,21 @@ def window_factors(window: WindowName, n: int) -> _core.WindowFactors:
 
 
 def lifter_harmonic_hz(n_lifters: int, rotation_hz: float) -> float:
-    """Frequency of the lifter torque harmonic, n_lifters x rotation frequency (section 6.2), Hz."""
-    if int(n_lifters) != n_lifters or n_lifters < 1:
-        raise ValueError(f"n_lifters = {n_lifters!r} is not valid; it must be an integer >= 1")
+    """Frequency of the lifter torque harmonic, n_lifters x rotation frequency (section 6.2), Hz.
+
+    ``n_lifters`` is an integer in [1, ``MAX_LIFTERS``]; the result must be finite."""
+    whole = (isinstance(n_lifters, Integral) and not isinstance(n_lifters, bool)) or (
+        isinstance(n_lifters, float) and float(n_lifters).is_integer())
+    if not whole or not 1 <= n_lifters <= MAX_LIFTERS:
+        raise ValueError(f"n_lifters = {n_lifters!r} is not valid; it must be an integer in "
+                         f"[1, {MAX_LIFTERS}]")
     if not (np.isfinite(rotation_hz) and rotation_hz > 0):
         raise ValueError(f"rotation_hz = {rotation_hz!r} is not valid; it must be > 0 Hz")
-    return float(n_lifters) * float(rotation_hz)
+    lth = float(n_lifters) * float(rotation_hz)
+    if not np.isfinite(lth):
+        raise ValueError(f"rotation_hz = {rotation_hz!r} is not valid; the LTH, "
+                         f"{n_lifters} lifters x rotation_hz, must be finite")
+    return lth
 
 
 @dataclass(frozen=True)
