@@ -86,7 +86,7 @@ class BlockAnalysis:
         """A short plain-text report."""
         e = self.energy
         widened = " (widened to the window's main lobe)" if e.widened else ""
-        lines = ", ".join(f"{f:.3f}" for f in self.lines_hz) or "none"
+        lines = ", ".join(f"{f:.3f}" for f in self.lines_hz) + " Hz" if self.lines_hz else "none"
         return "\n".join([
             f"block length TR        {self.record_length_s:.4g} s "
             f"(resolution {1 / self.record_length_s:.4g} Hz)",
@@ -94,7 +94,7 @@ class BlockAnalysis:
             f"LTH expected           {self.lth_expected_hz:.4f} Hz",
             f"LTH found              {self.lth.frequency_hz:.4f} Hz, amplitude "
             f"{self.lth.amplitude:.4g} N m",
-            f"drive-train lines      {lines} Hz",
+            f"drive-train lines      {lines}",
             f"removed band width     +-{e.half_width_hz:.3g} Hz{widened}",
             f"spectral energy        {e.energy:.6g} (N m)^2 s "
             f"(mean and lines removed, {100 * e.fraction_kept:.1f} % of the band kept)",
