@@ -109,10 +109,12 @@ def _positive(where: str, value: object, unit: str = "") -> float:
 
 
 def _between(where: str, value: object, low: float, high: float, unit: str = "",
-             low_open: bool = False) -> float:
-    """A finite real number in [low, high] (or (low, high]) as float."""
+             low_open: bool = False, why: str = "") -> float:
+    """A finite real number in [low, high] (or (low, high]) as float; ``why`` the range is
+    what it is goes into the message."""
     unit_text = f" {unit}" if unit else ""
-    valid = f"in {'(' if low_open else '['}{low:g}, {high:g}]{unit_text}"
+    reason = f" ({why})" if why else ""
+    valid = f"in {'(' if low_open else '['}{low:g}, {high:g}]{unit_text}{reason}"
     x = _real(where, value, unit, valid)
     if not ((x > low if low_open else x >= low) and x <= high):
         raise _fail(where, value, valid, unit)
