@@ -481,7 +481,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args))
+        code = int(args.func(args))
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
+        return code
     except BrokenPipeError:
         # the reader of stdout left (e.g. `millscope analyze ... | head`): stop quietly, as the
         # Python documentation says (signal module, "Note on SIGPIPE"); point stdout at devnull
