@@ -13,18 +13,31 @@ from collections.abc import Mapping
 from numbers import Integral, Real
 from typing import Any
 
-__all__ = ["keys", "integer", "number", "show"]
+__all__ = ["as_float", "keys", "integer", "number", "show"]
 
 
 def _is_number(value: object) -> bool:
     return isinstance(value, Real) and not isinstance(value, bool)
 
 
+def as_float(value: object) -> float:
+    """``value`` as a float when it is a real number (not a bool), else nan; an integer too
+    large for a float is inf."""
+    if not _is_number(value):
+        return math.nan
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except OverflowError:
+        return math.inf
+
+
 def show(value: object) -> str:
     """A value as error messages print it: numbers plainly (no ``np.float64(...)``), long
     values cut short."""
     if isinstance(value, Integral) and _is_number(value):
-        text = str(int(value)) if abs(int(value)) < 10**30 else f"{float(int(value)):.3g}"
+        n = int(value)
+        text = str(n) if abs(n) < 10**30 else \
+            f"{'-' if n < 0 else ''}~1e{int(abs(n).bit_length() * math.log10(2))}"
     elif _is_number(value):
         text = repr(float(value))  # type: ignore[arg-type]
     else:
@@ -62,7 +75,7 @@ def number(where: str, value: object, error: type[ValueError], *, low: float = -
     why : str
         Why the range is what it is, appended to the message.
     """
-    x = float(value) if _is_number(value) else math.nan  # type: ignore[arg-type]
+    x = as_float(value)
     inside = ((x > low if low_open else x >= low) and (x < high if high_open else x <= high))
     if not (math.isfinite(x) and inside):
         unit_text = f" {unit}" if unit else ""

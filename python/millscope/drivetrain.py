@@ -15,13 +15,13 @@ The ``drive.json`` schema
 One JSON object with exactly these keys (the command line reads it with ``--drive``)::
 
     motor    object   pole_pairs  integer in [1, 1000]              required
-                      supply_hz   number > 0, Hz          \\  exactly one of the two
-                      speed_hz    number > 0, Hz          /  (speed_hz: motor shaft turn)
+                      supply_hz   number in (0, 1e4], Hz  \\  exactly one of the two
+                      speed_hz    number in (0, 1e4], Hz  /  (speed_hz: motor shaft turn)
                       slip        number in [0, 1)        only with supply_hz; default 0
     stages   array    one object per gear stage, from the motor to the mill (may be empty):
                       driver_teeth  integer in [1, 10000]  teeth of the input (driving) gear
                       driven_teeth  integer in [1, 10000]  teeth of the output (driven) gear
-                      ratio         number > 0     input speed / output speed
+                      ratio         number in [1e-3, 1e3]  input speed / output speed
                       name          string         label of the stage's lines (optional)
                       A stage gives both tooth counts (the ratio is driven/driver), or a ratio,
                       optionally with one tooth count so that its mesh line is known.
@@ -87,6 +87,10 @@ DECIMATE_FACTOR = 2.5
 MAX_TEETH = 10_000
 #: The most pole pairs a motor may have (slow synchronous mill motors have some tens).
 MAX_POLE_PAIRS = 1_000
+#: The highest supply or shaft frequency of a motor, Hz (600,000 rpm, beyond any motor).
+MAX_MOTOR_HZ = 10_000.0
+#: The largest speed change of one gear stage, either way.
+MAX_STAGE_RATIO = 1_000.0
 
 
 class DriveError(ValueError):
@@ -100,8 +104,7 @@ def _is_int(value: Any) -> bool:
 
 
 def _is_real(value: Any) -> bool:
-    return (isinstance(value, numbers.Real) and not isinstance(value, bool)
-            and math.isfinite(float(value)))
+    return math.isfinite(_checks.as_float(value))
 
 
 def _int_in(owner: str, name: str, value: Any, maximum: int) -> int:
@@ -155,10 +158,14 @@ class Motor:
                              f"supply_hz = {self.supply_hz!r}, speed_hz = {self.speed_hz!r}")
         if self.supply_hz is not None:
             object.__setattr__(self, "supply_hz",
-                               _positive("Motor", "supply_hz", self.supply_hz, " Hz"))
+                               _checks.number("Motor.supply_hz", self.supply_hz, ValueError,
+                                              low=0.0, low_open=True, high=MAX_MOTOR_HZ,
+                                              unit="Hz"))
         if self.speed_hz is not None:
             object.__setattr__(self, "speed_hz",
-                               _positive("Motor", "speed_hz", self.speed_hz, " Hz"))
+                               _checks.number("Motor.speed_hz", self.speed_hz, ValueError,
+                                              low=0.0, low_open=True, high=MAX_MOTOR_HZ,
+                                              unit="Hz"))
         if not (_is_real(self.slip) and 0.0 <= float(self.slip) < 1.0):
             raise ValueError(f"Motor.slip = {self.slip!r} is not valid; it must be a number "
                              "in [0, 1)")
@@ -217,7 +224,10 @@ class GearStage:
                 object.__setattr__(self, key, _int_in("GearStage", key, value, MAX_TEETH))
         both = self.driver_teeth is not None and self.driven_teeth is not None
         if self.ratio is not None:
-            object.__setattr__(self, "ratio", _positive("GearStage", "ratio", self.ratio))
+            object.__setattr__(self, "ratio", _checks.number(
+                "GearStage.ratio", self.ratio, ValueError, low=1 / MAX_STAGE_RATIO,
+                high=MAX_STAGE_RATIO, why="a gear stage changes the speed by at most "
+                f"{MAX_STAGE_RATIO:g} either way"))
             if both:
                 raise ValueError(
                     "GearStage: give the ratio or both tooth counts, not both; got "

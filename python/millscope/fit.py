@@ -24,6 +24,7 @@ the valid range.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -148,7 +149,7 @@ class Calibration:
         if not isinstance(self.fit, LogFit):
             raise err(f"Calibration.fit = {_checks.show(self.fit)} is not valid; it must be a "
                       "LogFit")
-        _check_fit(self.fit)
+        object.__setattr__(self, "fit", _check_fit(self.fit))
         _checks.number("Calibration.reference_energy", self.reference_energy, err, low=0.0,
                        low_open=True, unit="(N m)^2 s")
         lifters = _checks.integer("Calibration.lifters", self.lifters, err, low=1,
@@ -362,10 +363,11 @@ class Calibration:
                       ) from None
 
 
-def _check_fit(fit: LogFit) -> None:
-    """Raise :class:`CalibrationError` unless ``fit`` is a least-squares fit y = a ln(x) + b of
-    per-unit energies (y <= 1) that :func:`~millscope.logfit.log_fit` could have made: its
-    fields finite and in range, and consistent with each other."""
+def _check_fit(fit: LogFit) -> LogFit:
+    """``fit`` with its numbers as float (n as int); :class:`CalibrationError` unless it is a
+    least-squares fit y = a ln(x) + b of per-unit energies (y <= 1) that
+    :func:`~millscope.logfit.log_fit` could have made: its fields finite and in range, and
+    consistent with each other."""
     err = CalibrationError
     n = _checks.integer("Calibration.fit.n", fit.n, err, low=2, high=MAX_FIT_POINTS)
     x_min = _checks.number("Calibration.fit.x_min", fit.x_min, err, low=0.0, low_open=True)
@@ -398,24 +400,35 @@ def _check_fit(fit: LogFit) -> None:
                       f"must lie in [-{bound:.4g}, {bound:.4g}] (sqrt(n): the fit of {n} "
                       "per-unit energies, each <= 1)")
     _checks.number("Calibration.fit.r2", fit.r2, err, low=0.0, high=1.0)
+    plain = dataclasses.replace(
+        fit, n=n, a=a, b=b, r2=float(fit.r2), x_min=x_min, x_max=x_max,
+        ln_x_mean=float(fit.ln_x_mean), ln_x_sxx=float(fit.ln_x_sxx))
     if n < MIN_LEVELS_FOR_INTERVALS:
+        stderrs: dict[str, float] = {}
         for name in _UNDEFINED_FOR_TWO_POINTS:
             value = getattr(fit, name)
             if not (isinstance(value, float) and math.isnan(value)):
-                _checks.number(f"Calibration.fit.{name}", value, err, low=0.0,
-                               why="or null: a fit through 2 points has none")
-        return
+                value = _checks.number(f"Calibration.fit.{name}", value, err, low=0.0,
+                                       why="or null: a fit through 2 points has none")
+            stderrs[name] = value
+        return dataclasses.replace(plain, a_stderr=stderrs["a_stderr"],
+                                   b_stderr=stderrs["b_stderr"],
+                                   residual_std=stderrs["residual_std"])
     s = _checks.number("Calibration.fit.residual_std", fit.residual_std, err, low=0.0,
                        high=math.sqrt(n / (n - 2)),
                        why=f"the residuals of {n} per-unit energies, each <= 1")
     # the standard errors follow from the other fields (as log_fit computes them)
-    for name, expected in (("a_stderr", s / math.sqrt(fit.ln_x_sxx)),
-                           ("b_stderr", s * math.sqrt(1 / n + fit.ln_x_mean**2
-                                                      / fit.ln_x_sxx))):
+    stderrs = {}
+    for name, expected in (("a_stderr", s / math.sqrt(plain.ln_x_sxx)),
+                           ("b_stderr", s * math.sqrt(1 / n + plain.ln_x_mean**2
+                                                      / plain.ln_x_sxx))):
         value = _checks.number(f"Calibration.fit.{name}", getattr(fit, name), err, low=0.0)
         if not math.isclose(value, expected, rel_tol=1e-9, abs_tol=1e-300):
             raise err(f"Calibration.fit.{name} = {value!r} is not valid; it must be "
                       f"{expected!r}, as residual_std, n, ln_x_mean and ln_x_sxx give it")
+        stderrs[name] = value
+    return dataclasses.replace(plain, a_stderr=stderrs["a_stderr"], b_stderr=stderrs["b_stderr"],
+                               residual_std=s)
 
 
 def _named(cal: Calibration) -> str:

@@ -5,14 +5,14 @@ A :class:`Scene` is a drum (:class:`Drum`, with optional :class:`Lifters`), a ch
 (restitution, friction) for every pair of materials in use, plus the rotation speed.
 Everything is SI (m, kg, Pa, s, rad/s, Hz). Every class checks its fields on construction and
 raises ``ValueError`` naming the class, the field, the value and the valid range, e.g.
-``Fraction.diameter = -0.01 m is not valid; it must be > 0``. Numbers may be given as Python
+``Fraction.diameter = -0.01 m is not valid; it must be in [0.0001, 20] m``. Numbers may be given as Python
 or numpy ints and floats and are stored as ``float``; bools, NaN and infinities are refused.
 
 Scenes round-trip through plain JSON-able dicts (:meth:`Scene.to_dict`,
 :meth:`Scene.from_dict`), which is how records and checkpoints carry them, and through JSON
 files (:meth:`Scene.load`). Every number has a range a mill can have, so that nothing computed
-from a scene overflows: a drum 0.05 to 20 m across and up to 50 m long, materials no denser
-than 1e5 kg/m^3 and no stiffer than 1e12 Pa, restitution in [0.01, 1], friction up to 10,
+from a scene overflows: a drum 0.05 to 20 m across and up to 50 m long, spheres of at least
+0.1 mm, materials of 1 to 1e5 kg/m^3 and 1 to 1e12 Pa, restitution in [0.01, 1], friction up to 10,
 gravity up to 1000 m/s^2, at most 2**31 - 1 spheres. A dict or file that is not a valid
 scene raises :class:`SceneError` (a ``ValueError``) naming the field, its value and the valid
 range.
@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ._checks import as_float, show
 from ._files import MAX_JSON_BYTES, read_json
 from .contact import MIN_RESTITUTION, rayleigh_time
 from .spectral import MAX_LIFTERS
@@ -81,10 +82,8 @@ def _is_real(value: object) -> bool:
 
 def _show(value: object) -> str:
     """A value as error messages print it: numbers plainly (no ``np.float64(...)``)."""
-    if isinstance(value, Integral) and not isinstance(value, (bool, np.bool_)):
-        return repr(int(value))
     if _is_real(value):
-        return repr(float(value))  # type: ignore[arg-type]
+        return show(value)
     return repr(value)
 
 
@@ -96,9 +95,10 @@ def _fail(where: str, value: object, valid: str, unit: str = "") -> ValueError:
 
 def _real(where: str, value: object, unit: str, valid: str) -> float:
     """A finite real number as float; ``valid`` is the range the caller goes on to check."""
-    if not _is_real(value) or not math.isfinite(float(value)):  # type: ignore[arg-type]
+    x = as_float(value) if not isinstance(value, np.bool_) else math.nan
+    if not math.isfinite(x):
         raise _fail(where, value, f"a finite number {valid}".rstrip(), unit)
-    return float(value)  # type: ignore[arg-type]
+    return x
 
 
 def _positive(where: str, value: object, unit: str = "") -> float:
@@ -175,9 +175,9 @@ class Material:
     name : str
         Non-empty, unique within a scene.
     density : float
-        rho, kg/m^3, > 0.
+        rho, kg/m^3, in [1, 1e5] (osmium, the densest element, has 22590).
     shear_modulus : float
-        G, Pa, > 0.
+        G, Pa, in [1, 1e12] (diamond has 4.8e11).
     poisson : float
         Poisson ratio nu, in (-1, 0.5).
     """
@@ -189,10 +189,9 @@ class Material:
 
     def __post_init__(self) -> None:
         name = _text("Material.name", self.name)
-        density = _between("Material.density", self.density, 0.0, MAX_DENSITY, "kg/m^3",
-                           low_open=True)
-        shear_modulus = _between("Material.shear_modulus", self.shear_modulus, 0.0,
-                                 MAX_SHEAR_MODULUS, "Pa", low_open=True)
+        density = _between("Material.density", self.density, 1.0, MAX_DENSITY, "kg/m^3")
+        shear_modulus = _between("Material.shear_modulus", self.shear_modulus, 1.0,
+                                 MAX_SHEAR_MODULUS, "Pa")
         nu = _real("Material.poisson", self.poisson, "", "in (-1, 0.5)")
         if not -1.0 < nu < 0.5:
             raise _fail("Material.poisson", self.poisson, "in (-1, 0.5)")
@@ -327,9 +326,10 @@ class Drum:
     Attributes
     ----------
     diameter : float
-        Inner diameter D, m, > 0.
+        Inner diameter D, m, in [0.05, 20].
     length : float
-        Inner length L, m, > 0 (the period along the axis when ``end_walls`` is False).
+        Inner length L, m, in (0, 50] (the period along the axis when ``end_walls`` is
+        False).
     material : str
         Name of the drum's material (shell, lifters and end walls).
     end_walls : bool
@@ -408,9 +408,10 @@ class Fraction:
     material : str
         Name of the material.
     diameter : float
-        Sphere diameter d, m, > 0.
+        Sphere diameter d, m, in [0.0001, 20] (and below the gap to the axis, checked by
+        :class:`Scene`).
     count : int
-        Number of spheres, >= 1.
+        Number of spheres, in [1, 2**31 - 1].
     name : str
         A label such as "balls" or "particles", unique within a scene; "" (the default)
         stands for the material name.
@@ -474,7 +475,7 @@ class Scene:
         omega_c = sqrt(2 g / (D - d_max)) ("ball", DESIGN.md section 2) or sqrt(2 g / D)
         ("drum"), d_max the largest sphere diameter.
     gravity : float
-        g, m/s^2, > 0, acting along -y.
+        g, m/s^2, in (0, 1000], acting along -y.
     clamp_normal_force : bool
         Clamp the total normal force at zero (off by default, as in EDEM and LIGGGHTS).
     name : str
