@@ -779,14 +779,9 @@ class Scene:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Scene:
-        """Read a scene JSON file (:meth:`to_dict` written with ``json.dump``).
-
-        Raises
-        ------
-        SceneError
-            Naming the file and the problem: missing or unreadable file, larger than
-            ``MAX_JSON_BYTES``, invalid JSON, or not a valid scene (as :meth:`from_dict`).
-        """
+        """Read a scene JSON file (:meth:`to_dict` written with ``json.dump``); a missing or
+        unreadable file, one larger than ``MAX_JSON_BYTES``, invalid JSON or an invalid scene
+        (as :meth:`from_dict` checks it) raises :class:`SceneError` naming the file."""
         data = read_json(path, "scene", SceneError, MAX_JSON_BYTES)
         try:
             return cls.from_dict(data)
