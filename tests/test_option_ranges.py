@@ -15,6 +15,7 @@ from millscope.presets import pilot_mill
 from millscope.synthetic import SyntheticTorque, synthetic_record
 
 CONTENT = SyntheticTorque()
+LTH = CONTENT.lifters * CONTENT.rotation_hz
 STEEL = pilot_mill(0.71, None, 1, "tiny").material("steel")
 #: The bar wave speed sqrt(E / rho), E = 2 G (1 + nu), of the tiny scale's steel, m/s.
 SOUND = math.sqrt(2 * STEEL.shear_modulus * (1 + STEEL.poisson) / STEEL.density)
@@ -52,6 +53,10 @@ CASES = [
     (lambda f: ["study", "accuracy", "--warm-up", "1e308", "--vary-shear", "0.5", "--out",
                 str(f["tmp"] / "study"), "--no-progress"],
      "Setting.warm_up_s = 1e+308 s is not valid; it must be in [0, 3600] s"),
+    # removed bands no wider than the LTH frequency (the energy was 0, "0.0 % kept", exit 0)
+    (lambda f: ["analyze", f["record"], "--lifters", "16", "--rotation-hz",
+                str(CONTENT.rotation_hz), "--out", str(f["tmp"]), "--bandwidth", "1e308"],
+     f"bandwidth = 1e+308 Hz is not valid; it must be in (0, {LTH:g}] Hz"),
     # a step of at most the record's length
     (lambda f: ["monitor", f["record"], "--calibration", f["cal"], "--step", "1e308"],
      "step_s = 1e+308 is not valid; it must be in (0, 40] s"),
@@ -69,7 +74,8 @@ CASES = [
 @pytest.mark.parametrize(("args", "message"), CASES)
 def test_an_absurd_value_is_one_line_and_exit_2(files, capsys, args, message) -> None:
     """Each used to end in a traceback (OverflowError, ZeroDivisionError, RuntimeError from
-    the contact probe) or, for --step, in one window and exit 0."""
+    the contact probe) or in a silent result and exit 0 (one window for --step, an energy of
+    0 for --bandwidth)."""
     code = main(args(files))
     captured = capsys.readouterr()
     assert code == 2, captured.out

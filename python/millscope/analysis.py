@@ -117,6 +117,8 @@ def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
         Mill rotation frequency, Hz.
     lines_hz : sequence of float
         Drive-train lines to remove as well, Hz; those above Nyquist are ignored.
+    bandwidth : float
+        Full width of each removed band, Hz, in (0, LTH frequency].
     search_hz : float, optional
         Half-width of the LTH search, Hz (default 3 bins); real mills drift in speed.
     resolution_hz : float, optional
@@ -125,6 +127,10 @@ def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
         Count only this band, Hz (default 0 .. Nyquist).
     """
     lth_hz = lifter_harmonic_hz(lifters, rotation_hz)
+    if not (isinstance(bandwidth, (int, float)) and 0 < bandwidth <= lth_hz):
+        raise ValueError(f"bandwidth = {bandwidth!r} Hz is not valid; it must be in "
+                         f"(0, {lth_hz:g}] Hz, at most the LTH frequency: a wider band around "
+                         "the mean takes the LTH's band and the energy near it with it")
     nyquist = block.sample_rate_hz / 2
     if lth_hz > nyquist:
         raise ValueError(f"LTH at {lth_hz:g} Hz (lifters = {lifters} x rotation_hz = "
