@@ -56,7 +56,7 @@ CASES = [
     # removed bands no wider than the LTH frequency (the energy was 0, "0.0 % kept", exit 0)
     (lambda f: ["analyze", f["record"], "--lifters", "16", "--rotation-hz",
                 str(CONTENT.rotation_hz), "--out", str(f["tmp"]), "--bandwidth", "1e308"],
-     f"bandwidth = 1e+308 Hz is not valid; it must be in (0, {LTH:g}] Hz"),
+     f"bandwidth = 1e+308 Hz is not valid; it must be a finite number in (0, {LTH:g}] Hz"),
     # a step of at most the record's length
     (lambda f: ["monitor", f["record"], "--calibration", f["cal"], "--step", "1e308"],
      "step_s = 1e+308 is not valid; it must be in (0, 40] s"),

@@ -27,6 +27,7 @@ from typing import Any, get_args
 import numpy as np
 from numpy.typing import NDArray
 
+from . import _checks
 from .record import TorqueRecord
 from .spectral import (
     Peak,
@@ -37,7 +38,8 @@ from .spectral import (
     spectral_energy,
 )
 
-__all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block", "sub_block_energies"]
+__all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block", "check_bandwidth",
+           "sub_block_energies"]
 
 #: Names of :mod:`millscope.campaign_analysis` still importable from here (loaded lazily: the
 #: campaign analysis imports the campaign, which imports this module).
@@ -101,6 +103,16 @@ class BlockAnalysis:
         ])
 
 
+def check_bandwidth(name: str, bandwidth: object, lth_hz: float,
+                    error: type[ValueError] = ValueError) -> float:
+    """``bandwidth`` (the full width of each removed band, Hz) as a float when it lies in
+    (0, ``lth_hz``]: a band around the mean wider than the LTH frequency would take the LTH's
+    band, and the energy near it, with it. Else ``error`` naming ``name``."""
+    return _checks.number(name, bandwidth, error, low=0.0, low_open=True, high=lth_hz,
+                          unit="Hz", why="at most the LTH frequency: a wider band around the "
+                                         "mean takes the LTH's band with it")
+
+
 def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
                   lines_hz: Sequence[float] = (), window: WindowName = "hann",
                   bandwidth: float = 0.3, search_hz: float | None = None,
@@ -127,10 +139,7 @@ def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
         Count only this band, Hz (default 0 .. Nyquist).
     """
     lth_hz = lifter_harmonic_hz(lifters, rotation_hz)
-    if not (isinstance(bandwidth, (int, float)) and 0 < bandwidth <= lth_hz):
-        raise ValueError(f"bandwidth = {bandwidth!r} Hz is not valid; it must be in "
-                         f"(0, {lth_hz:g}] Hz, at most the LTH frequency: a wider band around "
-                         "the mean takes the LTH's band and the energy near it with it")
+    check_bandwidth("bandwidth", bandwidth, lth_hz)
     nyquist = block.sample_rate_hz / 2
     if lth_hz > nyquist:
         raise ValueError(f"LTH at {lth_hz:g} Hz (lifters = {lifters} x rotation_hz = "

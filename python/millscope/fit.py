@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 from . import _checks
 from ._files import MAX_JSON_BYTES, atomic_write, read_json
-from .analysis import WINDOWS, analyze_block
+from .analysis import WINDOWS, analyze_block, check_bandwidth
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 from .record import TorqueRecord
 from .spectral import MAX_LIFTERS, RemoveItem, lifter_harmonic_hz
@@ -166,10 +166,7 @@ class Calibration:
             "reference_energy": float(self.reference_energy),
             "block_s": _checks.number("Calibration.block_s", self.block_s, err, low=0.0,
                                       low_open=True, unit="s"),
-            "bandwidth": _checks.number(
-                "Calibration.bandwidth", self.bandwidth, err, low=0.0, low_open=True, high=lth,
-                unit="Hz", why="a band around the mean wider than the LTH frequency would "
-                               "remove the LTH's band with it"),
+            "bandwidth": check_bandwidth("Calibration.bandwidth", self.bandwidth, lth, err),
         }
         if not isinstance(self.window, str) or self.window not in WINDOWS:
             raise err(f"Calibration.window = {_checks.show(self.window)} is not valid; it must "
