@@ -12,6 +12,7 @@ from scipy import stats
 
 import millscope as ms
 from millscope.fit import (
+    CalibrationError,
     NoIntervalWarning,
     OutsideCalibrationWarning,
     log_fit_coefficients,
@@ -137,10 +138,11 @@ def test_calibration_round_trip_and_damaged_files(tmp_path, calibration) -> None
     data = json.loads(path.read_text())
     del data["fit"]
     bad.write_text(json.dumps(data))
-    with pytest.raises(ValueError, match="incomplete or damaged"):
+    with pytest.raises(CalibrationError, match="missing key 'fit'"):
         ms.Calibration.load(bad)
     with pytest.raises(ValueError, match="reference_energy = 0"):
-        ms.Calibration(fit=calibration.fit, reference_energy=0.0, lifters=16, rotation_hz=0.5)
+        ms.Calibration(fit=calibration.fit, reference_energy=0.0, lifters=16, rotation_hz=0.5,
+                       block_s=10.0)
 
 
 
@@ -149,7 +151,7 @@ def test_a_two_point_calibration_is_standard_json(tmp_path) -> None:
     read back as nan."""
     fit = ms.log_fit([1.0, 3.0], [1.0, 0.5])
     assert math.isnan(fit.a_stderr)
-    cal = ms.Calibration(fit=fit, reference_energy=2.0, lifters=16, rotation_hz=0.5)
+    cal = ms.Calibration(fit=fit, reference_energy=2.0, lifters=16, rotation_hz=0.5, block_s=10.0)
     path = cal.save(tmp_path / "cal.json")
 
     def refuse(name: str) -> None:
@@ -162,7 +164,7 @@ def test_a_two_point_calibration_is_standard_json(tmp_path) -> None:
     assert (loaded.fit.a, loaded.fit.b, loaded.fit.n) == (fit.a, fit.b, 2)
     data["fit"] = [1, 2]
     (tmp_path / "bad.json").write_text(json.dumps(data))
-    with pytest.raises(ValueError, match="incomplete or damaged"):
+    with pytest.raises(CalibrationError, match="calibration fit must be a JSON object"):
         ms.Calibration.load(tmp_path / "bad.json")
 
 # -- calibration from a campaign's results ---------------------------------------------------------

@@ -124,9 +124,9 @@ def test_a_calibration_without_band_warns_and_takes_one_given(calibration, tmp_p
     old = _format_1(calibration, tmp_path / "old.json")
     assert old.band_hz is None and calibration.band_hz == pytest.approx(50.0)
     record = long_record(sample_rate_hz=1000.0, noise_scale=np.sqrt(10.0))
-    with pytest.warns(MissingBandWarning, match=r"has no band_hz \(a format-1 file\).*the 1000 "
-                                                "Hz record is neither decimated nor "
-                                                "band-limited") as caught:
+    message = (r"gives no band_hz \(its band_hz is null, or its file is of format 1, which has "
+               r"none\).*the 1000 Hz record is neither decimated nor band-limited")
+    with pytest.warns(MissingBandWarning, match=message) as caught:
         unbounded = ms.monitor(record, old)
     assert len(caught) == 1 and caught[0].filename == __file__
     assert all(w.outside and w.level < 1.0 for w in unbounded)

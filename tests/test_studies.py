@@ -39,8 +39,9 @@ from .cpu import usable_cores
     ({"dt_fraction": 0.0}, ["Setting.dt_fraction", "0.0", "(0, 0.5]"]),
     ({"shear_modulus_factor": 2.0}, ["Setting.shear_modulus_factor", "2.0", "(0, 1]"]),
     ({"shear_modulus_factor": "soft"}, ["Setting.shear_modulus_factor", "'soft'", "(0, 1]"]),
-    ({"record_s": -1.0}, ["Setting.record_s", "-1.0 s", "> 0"]),
-    ({"warm_up_s": math.nan}, ["Setting.warm_up_s", "nan", ">= 0"]),
+    ({"record_s": -1.0}, ["Setting.record_s", "-1.0 s", "in (0, 3598] s"]),
+    ({"record_s": 1e308}, ["Setting.record_s", "1e+308 s", "in (0, 3598] s", "3600 s of rotation"]),
+    ({"warm_up_s": math.nan}, ["Setting.warm_up_s", "nan", "in [0, 3600] s"]),
     ({"sampling": "peak"}, ["Setting.sampling", "'peak'", "'instant', 'mean'"]),
     ({"scale": "huge"}, ["Setting.scale", "'huge'", "'paper'", "'tiny'"]),
 ])

@@ -45,16 +45,54 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
         raise
 
 
-def read_json(path: str | os.PathLike[str], what: str) -> Any:
-    """The parsed JSON of ``path``; a missing or malformed file raises ValueError naming the file
-    and ``what`` it should have been (e.g. "calibration")."""
+#: The largest JSON file :func:`read_json` reads, bytes. Calibrations, drives and scenes are a
+#: few kilobytes; a file of megabytes is not one of them (or is /dev/zero), and is refused
+#: before it fills the memory.
+MAX_JSON_BYTES = 4 * 1024 * 1024
+
+
+def read_json(path: str | os.PathLike[str], what: str, error: type[ValueError] = ValueError,
+              max_bytes: int | None = None) -> Any:
+    """The parsed JSON of ``path``.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    what : str
+        What the file should hold (e.g. "calibration"), for the messages.
+    error : type
+        The ``ValueError`` subclass raised for every problem of the file.
+    max_bytes : int, optional
+        Larger files are refused unread (at most ``max_bytes + 1`` bytes are read); loaders of
+        small formats pass ``MAX_JSON_BYTES``. None: no limit.
+
+    Raises
+    ------
+    error
+        Naming the file: missing, not a regular file, unreadable, larger than ``max_bytes``,
+        not UTF-8, not valid JSON, or nested too deeply to parse.
+    """
     source = Path(path)
     try:
-        return json.loads(source.read_text())
+        with open(source, "rb") as fh:
+            raw = fh.read(-1 if max_bytes is None else max_bytes + 1)
     except FileNotFoundError:
-        raise ValueError(f"{source}: no such {what} file") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{source}: not valid JSON ({exc})") from None
+        raise error(f"{source}: no such {what} file") from None
+    except OSError as exc:  # a directory, no permission ...
+        raise error(f"{source}: cannot read the {what} file ({exc.strerror or exc})") from None
+    if max_bytes is not None and len(raw) > max_bytes:
+        raise error(f"{source}: larger than {max_bytes} bytes; a {what} file is a small JSON "
+                    f"file, at most {max_bytes} bytes")
+    try:
+        return json.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise error(f"{source}: not a UTF-8 text file (byte {exc.start}); a {what} file is "
+                    "JSON text") from None
+    except RecursionError:
+        raise error(f"{source}: JSON nested too deeply to read; not a {what} file") from None
+    except ValueError as exc:  # JSONDecodeError, or an integer of over 4300 digits
+        raise error(f"{source}: not valid JSON ({exc})") from None
 
 
 def read_npy_header(fp: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:

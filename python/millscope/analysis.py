@@ -27,6 +27,7 @@ from typing import Any, get_args
 import numpy as np
 from numpy.typing import NDArray
 
+from . import _checks
 from .record import TorqueRecord
 from .spectral import (
     Peak,
@@ -37,7 +38,8 @@ from .spectral import (
     spectral_energy,
 )
 
-__all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block", "sub_block_energies"]
+__all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block", "check_bandwidth",
+           "sub_block_energies"]
 
 #: Names of :mod:`millscope.campaign_analysis` still importable from here (loaded lazily: the
 #: campaign analysis imports the campaign, which imports this module).
@@ -86,18 +88,28 @@ class BlockAnalysis:
         """A short plain-text report."""
         e = self.energy
         widened = " (widened to the window's main lobe)" if e.widened else ""
-        lines = ", ".join(f"{f:.3f}" for f in self.lines_hz) or "none"
+        lines = ", ".join(f"{f:.3f}" for f in self.lines_hz) + " Hz" if self.lines_hz else "none"
         return "\n".join([
             f"block length TR        {self.record_length_s:.4g} s "
             f"(resolution {1 / self.record_length_s:.4g} Hz)",
             f"mean torque            {self.mean_torque_Nm:.6g} N m",
             f"LTH expected           {self.lth_expected_hz:.4f} Hz",
             f"LTH found              {self.lth.describe()}",
-            f"drive-train lines      {lines} Hz",
+            f"drive-train lines      {lines}",
             f"removed band width     +-{e.half_width_hz:.3g} Hz{widened}",
             f"spectral energy        {e.energy:.6g} (N m)^2 s "
             f"(mean and lines removed, {100 * e.fraction_kept:.1f} % of the band kept)",
         ])
+
+
+def check_bandwidth(name: str, bandwidth: object, lth_hz: float,
+                    error: type[ValueError] = ValueError) -> float:
+    """``bandwidth`` (the full width of each removed band, Hz) as a float when it lies in
+    (0, ``lth_hz``]: a band around the mean wider than the LTH frequency would take the LTH's
+    band, and the energy near it, with it. Else ``error`` naming ``name``."""
+    return _checks.number(name, bandwidth, error, low=0.0, low_open=True, high=lth_hz,
+                          unit="Hz", why="at most the LTH frequency: a wider band around the "
+                                         "mean takes the LTH's band with it")
 
 
 def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
@@ -116,6 +128,8 @@ def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
         Mill rotation frequency, Hz.
     lines_hz : sequence of float
         Drive-train lines to remove as well, Hz; those above Nyquist are ignored.
+    bandwidth : float
+        Full width of each removed band, Hz, in (0, LTH frequency].
     search_hz : float, optional
         Half-width of the LTH search, Hz (default 3 bins); real mills drift in speed.
     resolution_hz : float, optional
@@ -124,6 +138,7 @@ def analyze_block(block: TorqueRecord, *, lifters: int, rotation_hz: float,
         Count only this band, Hz (default 0 .. Nyquist).
     """
     lth_hz = lifter_harmonic_hz(lifters, rotation_hz)
+    check_bandwidth("bandwidth", bandwidth, lth_hz)
     nyquist = block.sample_rate_hz / 2
     if lth_hz > nyquist:
         raise ValueError(f"LTH at {lth_hz:g} Hz (lifters = {lifters} x rotation_hz = "

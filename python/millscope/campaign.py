@@ -69,7 +69,7 @@ from ._files import atomic_write, read_json
 from .analysis import AnalysisSettings, analyze_block
 from .presets import paper_cases
 from .record import RecordError, TorqueRecord
-from .scene import Scene, _choice, _fail, _positive, _real
+from .scene import Scene, _between, _choice, _fail, _positive, _real
 from .simulation import Simulation, _available_cores
 from .spectral import spectral_energy
 from .stiffness import time_step_limit
@@ -112,6 +112,12 @@ def _integer(where: str, value: object, lowest: int) -> int:
     return int(value)
 
 
+#: The longest rotation a case may simulate, s: an hour, 360,000 torque samples at 10 ms and
+#: some 17 CPU hours at the smallest preset scale (17 s of CPU per simulated second). Longer
+#: runs are refused before any work starts, rather than running for ever.
+MAX_DURATION_S = 3600.0
+
+
 @dataclass(frozen=True)
 class RunSettings:
     """How one case is run (everything but the scene). Validated on construction.
@@ -121,8 +127,8 @@ class RunSettings:
     seed : int
         Seed of the filling, >= 0 (:class:`~millscope.simulation.Simulation`).
     duration_s : float
-        Simulated time after the drum starts, s, > 0: the record ends here (record time 0 is
-        the start of rotation). Rounded to whole samples.
+        Simulated time after the drum starts, s, in (0, ``MAX_DURATION_S``] = (0, 3600]: the
+        record ends here (record time 0 is the start of rotation). Rounded to whole samples.
     warm_up_s : float
         The first ``warm_up_s`` s of rotation are simulated but not kept, s, in
         [0, duration_s); at least 2 samples must remain. 0 keeps the whole run.
@@ -156,7 +162,9 @@ class RunSettings:
     def __post_init__(self) -> None:
         values: dict[str, Any] = {
             "seed": _integer("RunSettings.seed", self.seed, 0),
-            "duration_s": _positive("RunSettings.duration_s", self.duration_s, "s"),
+            "duration_s": _between("RunSettings.duration_s", self.duration_s, 0.0,
+                                   MAX_DURATION_S, "s", low_open=True,
+                                   why="the longest rotation a case simulates"),
             "sample_dt": _positive("RunSettings.sample_dt", self.sample_dt, "s"),
             "sampling": _choice("RunSettings.sampling", self.sampling, SAMPLINGS),
             "threads": _integer("RunSettings.threads", self.threads, 1),

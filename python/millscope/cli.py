@@ -91,8 +91,15 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     if record is not raw:
         print(f"decimated from {raw.sample_rate_hz:g} Hz to {record.sample_rate_hz:g} Hz "
               "(anti-aliased)")
-    t1 = record.time_s[0] if args.t_from is None else args.t_from
-    t2 = record.time_s[-1] + record.dt if args.t_to is None else args.t_to
+    start, end = float(record.time_s[0]), float(record.time_s[-1] + record.dt)
+    for option, value in (("--from", args.t_from), ("--to", args.t_to)):
+        # a block past the record's ends would silently be cut to them
+        slack = 1e-6 * record.dt
+        if value is not None and not start - slack <= value <= end + slack:
+            raise CliError(f"{option} {value:g} s is not valid; it must lie within the record, "
+                           f"which spans {start:g} .. {end:g} s")
+    t1 = start if args.t_from is None else args.t_from
+    t2 = end if args.t_to is None else args.t_to
     block = record.block(t1, t2)
     result = analyze_block(block, lifters=args.lifters, rotation_hz=args.rotation_hz,
                            lines_hz=lines, window=args.window, bandwidth=args.bandwidth,
@@ -146,14 +153,14 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     decimated = ("" if result.decimated_from_hz is None else
                  f", decimated from {result.decimated_from_hz:g} Hz to "
                  f"{result.sample_rate_hz:g} Hz")
-    lines = ", ".join(f"{f:.3f}" for f in result.lines_hz) or "none"
+    lines = ", ".join(f"{f:.3f}" for f in result.lines_hz) + " Hz" if result.lines_hz else "none"
     print(f"# calibration {args.calibration}: {label}{fit.equation()}, R^2 = {fit.r2:.4f}, "
           f"levels {fit.x_min:g}..{fit.x_max:g}")
     print(f"# record {args.file}: {record.duration_s:g} s at {record.sample_rate_hz:g} Hz"
           f"{decimated}")
     print(f"# windows of {result.window_s:g} s every {result.step_s:g} s: "
           f"{len(result.windows)}; removed: mean, LTH near "
-          f"{calibration.lifters * calibration.rotation_hz:.3f} Hz, drive lines {lines} Hz")
+          f"{calibration.lifters * calibration.rotation_hz:.3f} Hz, drive lines: {lines}")
     for w in caught:
         print(f"# warning: {w.message}")
     percent = f"{100 * args.confidence:g}"
@@ -272,15 +279,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def cmd_advise(args: argparse.Namespace) -> int:
     """Stiffness advice for a preset case or a scene file (millscope.stiffness)."""
-    import json
-
     from .presets import pilot_mill
     from .scene import Scene
     from .stiffness import StiffnessWarning, advise_stiffness
 
     if args.scene is not None:
-        with open(args.scene, encoding="utf-8") as f:
-            scene = Scene.from_dict(json.load(f))
+        scene = Scene.load(args.scene)
     else:
         particles = None if args.particles == "none" else args.particles
         scene = pilot_mill(args.speed, particles, args.level, args.scale)
@@ -532,7 +536,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args))
+        code = int(args.func(args))
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
+        return code
+    except BrokenPipeError:
+        # the reader of stdout left (e.g. `millscope analyze ... | head`): stop quietly, as the
+        # Python documentation says (signal module, "Note on SIGPIPE"); point stdout at devnull
+        # so that the flush at exit does not fail again
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
     except (ValueError, OSError, CliError) as exc:
         message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         print(f"millscope: error: {message}", file=sys.stderr)

@@ -34,7 +34,7 @@ from tqdm.auto import tqdm
 from . import plots
 from ._files import atomic_write
 from .analysis import analyze_block
-from .campaign import Campaign, CaseResult, RunSettings
+from .campaign import MAX_DURATION_S, Campaign, CaseResult, RunSettings
 from .fit import (
     MIN_LEVELS_FOR_INTERVALS,
     Calibration,
@@ -75,7 +75,8 @@ class DemoPlan:
     load_levels : tuple of int
         Table 5's levels (1..7), at least 2 different ones (the main job uses 4).
     duration_s : float
-        Simulated time after the drum starts, s, > warm_up_s; 8 s by default (the paper: 14).
+        Simulated time after the drum starts, s, > warm_up_s and at most 3600
+        (``MAX_DURATION_S``); 8 s by default (the paper: 14).
     warm_up_s : float
         Simulated but not kept, s, >= 0; 2 s by default (the paper: 4), past which the mean
         torque of the tiny LDMS cases no longer drifts. The analysed block is the kept record,
@@ -122,9 +123,10 @@ class DemoPlan:
         for name in ("duration_s", "warm_up_s"):
             value = getattr(self, name)
             if (not isinstance(value, Real) or isinstance(value, bool)
-                    or not math.isfinite(float(value)) or float(value) < 0):
+                    or not 0 <= float(value) <= MAX_DURATION_S):
                 raise ValueError(f"DemoPlan.{name} = {value!r} is not valid; it must be a "
-                                 "finite number >= 0 (s)")
+                                 f"number in [0, {MAX_DURATION_S:g}] s (the longest rotation "
+                                 "a case simulates)")
         if not float(self.warm_up_s) < float(self.duration_s):
             raise ValueError(f"DemoPlan.duration_s = {self.duration_s!r} is not valid; it must "
                              f"be > warm_up_s = {self.warm_up_s!r} s")

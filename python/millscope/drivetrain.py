@@ -14,20 +14,22 @@ The ``drive.json`` schema
 -------------------------
 One JSON object with exactly these keys (the command line reads it with ``--drive``)::
 
-    motor    object   pole_pairs  integer >= 1                      required
-                      supply_hz   number > 0, Hz          \\  exactly one of the two
-                      speed_hz    number > 0, Hz          /  (speed_hz: motor shaft turn)
+    motor    object   pole_pairs  integer in [1, 1000]              required
+                      supply_hz   number in (0, 1e4], Hz  \\  exactly one of the two
+                      speed_hz    number in (0, 1e4], Hz  /  (speed_hz: motor shaft turn)
                       slip        number in [0, 1)        only with supply_hz; default 0
     stages   array    one object per gear stage, from the motor to the mill (may be empty):
-                      driver_teeth  integer >= 1   teeth of the input (driving) gear
-                      driven_teeth  integer >= 1   teeth of the output (driven) gear
-                      ratio         number > 0     input speed / output speed
+                      driver_teeth  integer in [1, 10000]  teeth of the input (driving) gear
+                      driven_teeth  integer in [1, 10000]  teeth of the output (driven) gear
+                      ratio         number in [1e-3, 1e3]  input speed / output speed
                       name          string         label of the stage's lines (optional)
                       A stage gives both tooth counts (the ratio is driven/driver), or a ratio,
                       optionally with one tooth count so that its mesh line is known.
-    lifters  integer >= 1   lifters in the mill
+    lifters  integer in [1, 10000]   lifters in the mill
 
-Unknown keys are errors, so that a misspelt key is not silently ignored.
+Unknown keys are errors, so that a misspelt key is not silently ignored, and every line of the
+drive (below) must come out finite. A file is read only up to ``MAX_JSON_BYTES``; every problem
+of a file raises :class:`DriveError` naming the key, its value and the valid range.
 
 The paper's rig: a four-pole motor (2 pole pairs) fed at 46 Hz by an adjustable speed drive, a
 three-stage gear set of total ratio 36.27 whose last stage is an 18-tooth pinion turning at
@@ -68,17 +70,32 @@ import numpy as np
 import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
-from ._files import atomic_write, read_json
+from . import _checks
+from ._files import MAX_JSON_BYTES, atomic_write, read_json
 from ._samples import check_samples
 from .record import TorqueRecord
+from .spectral import MAX_LIFTERS
 
-__all__ = ["DECIMATE_FACTOR", "DriveTrain", "GearStage", "InterferenceLine", "Motor", "decimate",
+__all__ = ["DECIMATE_FACTOR", "DriveError", "DriveTrain", "GearStage", "InterferenceLine", "Motor", "decimate",
            "decimate_record"]
 
 #: Records sampled faster than this x the analysis band are decimated to this x the band: the
 #: anti-aliasing filter of :func:`decimate` rolls off over the top fifth below the new Nyquist
 #: frequency, so 2.5x (not 2x) keeps the band itself flat.
 DECIMATE_FACTOR = 2.5
+#: The most teeth a gear may have (girth gears of the largest mills have a few hundred).
+MAX_TEETH = 10_000
+#: The most pole pairs a motor may have (slow synchronous mill motors have some tens).
+MAX_POLE_PAIRS = 1_000
+#: The highest supply or shaft frequency of a motor, Hz (600,000 rpm, beyond any motor).
+MAX_MOTOR_HZ = 10_000.0
+#: The largest speed change of one gear stage, either way.
+MAX_STAGE_RATIO = 1_000.0
+
+
+class DriveError(ValueError):
+    """A drive description (a ``drive.json``) that cannot be used; the message names the file,
+    the key, its value and the valid range."""
 
 
 # -- validation helpers ---------------------------------------------------------------------------
@@ -87,14 +104,13 @@ def _is_int(value: Any) -> bool:
 
 
 def _is_real(value: Any) -> bool:
-    return (isinstance(value, numbers.Real) and not isinstance(value, bool)
-            and math.isfinite(float(value)))
+    return math.isfinite(_checks.as_float(value))
 
 
-def _int_at_least(owner: str, name: str, value: Any, minimum: int = 1) -> int:
-    if not (_is_int(value) and int(value) >= minimum):
+def _int_in(owner: str, name: str, value: Any, maximum: int) -> int:
+    if not (_is_int(value) and 1 <= int(value) <= maximum):
         raise ValueError(f"{owner}.{name} = {value!r} is not valid; it must be an integer "
-                         f">= {minimum}")
+                         f"in [1, {maximum}]")
     return int(value)
 
 
@@ -136,16 +152,20 @@ class Motor:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "pole_pairs",
-                           _int_at_least("Motor", "pole_pairs", self.pole_pairs))
+                           _int_in("Motor", "pole_pairs", self.pole_pairs, MAX_POLE_PAIRS))
         if (self.supply_hz is None) == (self.speed_hz is None):
             raise ValueError("Motor: give exactly one of supply_hz and speed_hz; got "
                              f"supply_hz = {self.supply_hz!r}, speed_hz = {self.speed_hz!r}")
         if self.supply_hz is not None:
             object.__setattr__(self, "supply_hz",
-                               _positive("Motor", "supply_hz", self.supply_hz, " Hz"))
+                               _checks.number("Motor.supply_hz", self.supply_hz, ValueError,
+                                              low=0.0, low_open=True, high=MAX_MOTOR_HZ,
+                                              unit="Hz"))
         if self.speed_hz is not None:
             object.__setattr__(self, "speed_hz",
-                               _positive("Motor", "speed_hz", self.speed_hz, " Hz"))
+                               _checks.number("Motor.speed_hz", self.speed_hz, ValueError,
+                                              low=0.0, low_open=True, high=MAX_MOTOR_HZ,
+                                              unit="Hz"))
         if not (_is_real(self.slip) and 0.0 <= float(self.slip) < 1.0):
             raise ValueError(f"Motor.slip = {self.slip!r} is not valid; it must be a number "
                              "in [0, 1)")
@@ -201,10 +221,13 @@ class GearStage:
         for key in ("driver_teeth", "driven_teeth"):
             value = getattr(self, key)
             if value is not None:
-                object.__setattr__(self, key, _int_at_least("GearStage", key, value))
+                object.__setattr__(self, key, _int_in("GearStage", key, value, MAX_TEETH))
         both = self.driver_teeth is not None and self.driven_teeth is not None
         if self.ratio is not None:
-            object.__setattr__(self, "ratio", _positive("GearStage", "ratio", self.ratio))
+            object.__setattr__(self, "ratio", _checks.number(
+                "GearStage.ratio", self.ratio, ValueError, low=1 / MAX_STAGE_RATIO,
+                high=MAX_STAGE_RATIO, why="a gear stage changes the speed by at most "
+                f"{MAX_STAGE_RATIO:g} either way"))
             if both:
                 raise ValueError(
                     "GearStage: give the ratio or both tooth counts, not both; got "
@@ -269,17 +292,6 @@ _MOTOR_KEYS = tuple(f.name for f in fields(Motor))
 _STAGE_KEYS = tuple(f.name for f in fields(GearStage))
 
 
-def _check_keys(where: str, obj: dict[str, Any], allowed: tuple[str, ...],
-                required: tuple[str, ...]) -> None:
-    missing = [k for k in required if k not in obj]
-    if missing:
-        raise ValueError(f"{where}: missing key {', '.join(repr(k) for k in missing)}")
-    unknown = [k for k in obj if k not in allowed]
-    if unknown:
-        raise ValueError(f"{where}: unknown key {', '.join(repr(k) for k in unknown)}; the keys "
-                         f"are {', '.join(allowed)}")
-
-
 @dataclass(frozen=True)
 class DriveTrain:
     """A mill drive: the motor, the gear stages from the motor to the mill, and the lifters.
@@ -318,7 +330,16 @@ class DriveTrain:
                 raise ValueError(f"DriveTrain.stages[{i}] = {stage!r} is not valid; it must be "
                                  "a GearStage")
         object.__setattr__(self, "stages", stages)
-        object.__setattr__(self, "lifters", _int_at_least("DriveTrain", "lifters", self.lifters))
+        object.__setattr__(self, "lifters",
+                           _int_in("DriveTrain", "lifters", self.lifters, MAX_LIFTERS))
+        try:
+            self.interference_lines()
+        except ValueError:
+            raise ValueError("DriveTrain: its speeds and ratios give a line that is not a "
+                             "finite frequency > 0 (the motor speed times or over the stage "
+                             f"ratios overflows): motor turn {self.motor.shaft_hz!r} Hz, total "
+                             f"ratio {self.total_ratio!r}; give speeds and ratios of a real "
+                             "drive") from None
 
     @classmethod
     def from_mill_speed(cls, mill_hz: float, stages: Iterable[GearStage], lifters: int,
@@ -453,19 +474,29 @@ class DriveTrain:
 
         Raises
         ------
-        ValueError
+        DriveError
             Naming `where`, the key and what is wrong with it (missing, unknown, wrong type or
             out of range).
         """
+        try:
+            return cls._from_dict(data, where)
+        except DriveError:
+            raise
+        except ValueError as exc:
+            raise DriveError(str(exc)) from None
+
+    @classmethod
+    def _from_dict(cls, data: Any, where: str) -> DriveTrain:
+        """:meth:`from_dict`, raising ValueError."""
         if not isinstance(data, dict):
             raise ValueError(f"{where}: expected a JSON object with keys motor, stages, lifters; "
                              f"got {type(data).__name__}")
-        _check_keys(where, data, _TOP_KEYS, _TOP_KEYS)
+        _checks.keys(where, data, ValueError, _TOP_KEYS, _TOP_KEYS)
         motor_data, stages_data = data["motor"], data["stages"]
         if not isinstance(motor_data, dict):
             raise ValueError(f"{where}: 'motor' must be an object; got "
                              f"{type(motor_data).__name__}")
-        _check_keys(f"{where}: motor", motor_data, _MOTOR_KEYS, ("pole_pairs",))
+        _checks.keys(f"{where}: motor", motor_data, ValueError, _MOTOR_KEYS, ("pole_pairs",))
         if not isinstance(stages_data, list):
             raise ValueError(f"{where}: 'stages' must be an array of objects; got "
                              f"{type(stages_data).__name__}")
@@ -478,7 +509,7 @@ class DriveTrain:
             if not isinstance(stage_data, dict):
                 raise ValueError(f"{where}: stages[{i}] must be an object; got "
                                  f"{type(stage_data).__name__}")
-            _check_keys(f"{where}: stages[{i}]", stage_data, _STAGE_KEYS, ())
+            _checks.keys(f"{where}: stages[{i}]", stage_data, ValueError, _STAGE_KEYS, ())
             try:
                 stages.append(GearStage(**stage_data))
             except ValueError as exc:
@@ -494,11 +525,12 @@ class DriveTrain:
 
         Raises
         ------
-        ValueError
-            Naming the file and the problem: missing file, invalid JSON, missing or unknown key,
-            wrong type, value out of range.
+        DriveError
+            Naming the file and the problem: missing or unreadable file, larger than
+            ``MAX_JSON_BYTES``, invalid JSON, missing or unknown key, wrong type, value out of
+            range.
         """
-        return cls.from_dict(read_json(path, "drive"), str(path))
+        return cls.from_dict(read_json(path, "drive", DriveError, MAX_JSON_BYTES), str(path))
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the drive as a ``drive.json`` (atomically: a temporary file, then a rename)."""

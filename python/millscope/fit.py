@@ -16,38 +16,56 @@ point estimate is still defined) but never silently: :meth:`Calibration.from_res
 ``MIN_LEVELS_FOR_INTERVALS`` (3) levels.
 
 Calibration files are JSON, format ``millscope-calibration-2``; files of format 1 (without
-``band_hz`` and ``block_relative_std``) are read too.
+``band_hz`` and ``block_relative_std``) are read too. A file is untrusted input: every field is
+checked against its type and range on load (:meth:`Calibration.load`, the same checks as
+construction), and any problem raises :class:`CalibrationError` naming the field, its value and
+the valid range.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
+import sys
 import warnings
 from collections.abc import Iterable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import MISSING, asdict, dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._files import atomic_write, read_json
-from .analysis import analyze_block
+from . import _checks
+from ._files import MAX_JSON_BYTES, atomic_write, read_json
+from .analysis import WINDOWS, analyze_block, check_bandwidth
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 from .record import TorqueRecord
-from .spectral import RemoveItem, lifter_harmonic_hz
+from .spectral import MAX_LIFTERS, RemoveItem, lifter_harmonic_hz
 
 if TYPE_CHECKING:
     from .campaign import CaseResult
     from .campaign_analysis import GroupAnalysis
 
 __all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit", "Calibration",
-           "FillEstimate", "estimate_fill", "OutsideCalibrationWarning", "NoIntervalWarning",
+           "CalibrationError", "FillEstimate", "estimate_fill", "OutsideCalibrationWarning", "NoIntervalWarning",
            "MIN_LEVELS_FOR_INTERVALS"]
 
 CALIBRATION_FORMAT = "millscope-calibration-2"
 READABLE_FORMATS = ("millscope-calibration-1", CALIBRATION_FORMAT)
 #: A fit through fewer load levels is exact and gives its estimates no interval.
 MIN_LEVELS_FOR_INTERVALS = 3
+#: The most points a calibration's fit may have (one per analysed case).
+MAX_FIT_POINTS = 10**6
+#: The most a block's energy may scatter, as standard deviation over mean.
+MAX_BLOCK_RELATIVE_STD = 10.0
+_FIT_KEYS = tuple(f.name for f in fields(LogFit))
+#: Standard errors that a fit through 2 points does not have (written as null).
+_UNDEFINED_FOR_TWO_POINTS = ("a_stderr", "b_stderr", "residual_std")
+
+
+class CalibrationError(ValueError):
+    """A calibration, or a calibration file, that cannot be used; the message names the field
+    (and the file), its value and the valid range."""
 
 
 class OutsideCalibrationWarning(UserWarning):
@@ -87,8 +105,9 @@ class Calibration:
     rotation_hz : float
         Mill rotation frequency, Hz, the calibration was made at.
     block_s : float
-        Length of the analysed block TR, s; energies scale with TR, so records are analysed in
-        blocks of this length.
+        Length of the analysed block TR, s (required: energies scale with TR, so records are
+        analysed in blocks of this length; pass the length of the blocks the fit was made
+        from, e.g. ``blk.duration_s``).
     bandwidth : float
         Full width of each removed band, Hz.
     window : str
@@ -114,7 +133,7 @@ class Calibration:
     reference_energy: float
     lifters: int
     rotation_hz: float
-    block_s: float = 10.0
+    block_s: float
     bandwidth: float = 0.3
     window: str = "hann"
     extra_lines_hz: tuple[float, ...] = ()
@@ -124,20 +143,57 @@ class Calibration:
     block_relative_std: float | None = None
 
     def __post_init__(self) -> None:
-        if not (self.reference_energy > 0 and math.isfinite(self.reference_energy)):
-            raise ValueError(f"Calibration.reference_energy = {self.reference_energy!r} is not "
-                             "valid; it must be finite and > 0 (N m)^2 s")
-        if self.block_s <= 0:
-            raise ValueError(f"Calibration.block_s = {self.block_s!r} is not valid; "
-                             "it must be > 0 s")
-        if self.band_hz is not None and not (math.isfinite(self.band_hz) and self.band_hz > 0):
-            raise ValueError(f"Calibration.band_hz = {self.band_hz!r} is not valid; it must be "
-                             "> 0 Hz or None")
-        if self.block_relative_std is not None and not (
-                math.isfinite(self.block_relative_std) and self.block_relative_std >= 0):
-            raise ValueError(f"Calibration.block_relative_std = {self.block_relative_std!r} is "
-                             "not valid; it must be finite and >= 0, or None")
-        lifter_harmonic_hz(self.lifters, self.rotation_hz)  # validates both
+        """Check every field (types and ranges); raise :class:`CalibrationError` naming the
+        first bad one, its value and the valid range."""
+        err = CalibrationError
+        if not isinstance(self.fit, LogFit):
+            raise err(f"Calibration.fit = {_checks.show(self.fit)} is not valid; it must be a "
+                      "LogFit")
+        object.__setattr__(self, "fit", _check_fit(self.fit))
+        _checks.number("Calibration.reference_energy", self.reference_energy, err, low=0.0,
+                       low_open=True, unit="(N m)^2 s")
+        lifters = _checks.integer("Calibration.lifters", self.lifters, err, low=1,
+                                  high=MAX_LIFTERS)
+        rotation = _checks.number("Calibration.rotation_hz", self.rotation_hz, err, low=0.0,
+                                  low_open=True, unit="Hz")
+        lth = lifters * rotation
+        if not math.isfinite(lth):
+            raise err(f"Calibration.rotation_hz = {rotation!r} Hz is not valid; lifters x "
+                      f"rotation_hz (the LTH) must be finite, so it must be <= "
+                      f"{sys.float_info.max / lifters:.4g} Hz with {lifters} lifters")
+        values: dict[str, Any] = {
+            "lifters": lifters, "rotation_hz": rotation,
+            "reference_energy": float(self.reference_energy),
+            "block_s": _checks.number("Calibration.block_s", self.block_s, err, low=0.0,
+                                      low_open=True, unit="s"),
+            "bandwidth": check_bandwidth("Calibration.bandwidth", self.bandwidth, lth, err),
+        }
+        if not isinstance(self.window, str) or self.window not in WINDOWS:
+            raise err(f"Calibration.window = {_checks.show(self.window)} is not valid; it must "
+                      f"be one of {', '.join(WINDOWS)}")
+        lines = self.extra_lines_hz
+        if isinstance(lines, (str, bytes, dict)) or not isinstance(lines, Iterable):
+            raise err(f"Calibration.extra_lines_hz = {_checks.show(lines)} is not valid; it "
+                      "must be a sequence of frequencies in Hz")
+        values["extra_lines_hz"] = tuple(
+            _checks.number(f"Calibration.extra_lines_hz[{i}]", f, err, low=0.0, low_open=True,
+                           unit="Hz") for i, f in enumerate(lines))
+        if not isinstance(self.label, str):
+            raise err(f"Calibration.label = {_checks.show(self.label)} is not valid; it must "
+                      "be a string")
+        if not isinstance(self.meta, dict):
+            raise err(f"Calibration.meta = {_checks.show(self.meta)} is not valid; it must be "
+                      "a dict (a JSON object)")
+        if self.band_hz is not None:
+            values["band_hz"] = _checks.number("Calibration.band_hz", self.band_hz, err,
+                                               low=0.0, low_open=True, unit="Hz")
+        if self.block_relative_std is not None:
+            values["block_relative_std"] = _checks.number(
+                "Calibration.block_relative_std", self.block_relative_std, err, low=0.0,
+                high=MAX_BLOCK_RELATIVE_STD, why="standard deviation over mean of one block's "
+                "energy; None when unknown")
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
 
     @classmethod
     def from_results(cls, results: Iterable[CaseResult], *, group: str | None = None,
@@ -265,20 +321,111 @@ class Calibration:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Calibration:
-        """Read a calibration written by :meth:`save` (format 2, or format 1); a damaged file
-        raises ValueError."""
+        """Read a calibration written by :meth:`save` (format 2, or format 1).
+
+        The whole file is checked: its size (at most ``MAX_JSON_BYTES``), the JSON, the keys
+        (unknown ones are errors) and every field's type and range, as construction checks
+        them.
+
+        Raises
+        ------
+        CalibrationError
+            For any problem of the file, naming the file, the field, its value and the valid
+            range.
+        """
         source = Path(path)
-        data = read_json(source, "calibration")
-        if not isinstance(data, dict) or data.pop("format", None) not in READABLE_FORMATS:
-            raise ValueError(f"{source}: not a millscope calibration (expected format "
-                             f"{' or '.join(repr(f) for f in READABLE_FORMATS)})")
+        err = CalibrationError
+        data = read_json(source, "calibration", err, max_bytes=MAX_JSON_BYTES)
+        if not isinstance(data, dict) or data.get("format") not in READABLE_FORMATS:
+            raise err(f"{source}: not a millscope calibration (expected format "
+                      f"{' or '.join(repr(f) for f in READABLE_FORMATS)})")
+        allowed = tuple(f.name for f in fields(cls))
+        required = tuple(f.name for f in fields(cls)
+                         if f.default is MISSING and f.default_factory is MISSING)
         try:
-            data["fit"] = LogFit(**{k: math.nan if v is None else v
-                                    for k, v in data["fit"].items()})
-            data["extra_lines_hz"] = tuple(data.get("extra_lines_hz", ()))
-            return cls(**data)
-        except (AttributeError, KeyError, TypeError) as exc:
-            raise ValueError(f"{source}: calibration is incomplete or damaged ({exc})") from None
+            body = dict(_checks.keys(f"{source}: calibration", data, err,
+                                     ("format", *allowed), ("format", *required)))
+            del body["format"]
+            fit = _checks.keys(f"{source}: calibration fit", body["fit"], err, _FIT_KEYS,
+                               _FIT_KEYS)
+            values: dict[str, Any] = {k: math.nan if v is None and k in _UNDEFINED_FOR_TWO_POINTS
+                                      else v for k, v in fit.items()}
+            body["fit"] = LogFit(**values)
+            if isinstance(body.get("extra_lines_hz"), list):
+                body["extra_lines_hz"] = tuple(body["extra_lines_hz"])
+            return cls(**body)
+        except CalibrationError as exc:
+            message = str(exc)
+            raise err(message if message.startswith(str(source)) else f"{source}: {message}"
+                      ) from None
+
+
+def _check_fit(fit: LogFit) -> LogFit:
+    """``fit`` with its numbers as float (n as int); :class:`CalibrationError` unless it is a
+    least-squares fit y = a ln(x) + b of per-unit energies (y <= 1) that
+    :func:`~millscope.logfit.log_fit` could have made: its fields finite and in range, and
+    consistent with each other."""
+    err = CalibrationError
+    n = _checks.integer("Calibration.fit.n", fit.n, err, low=2, high=MAX_FIT_POINTS)
+    x_min = _checks.number("Calibration.fit.x_min", fit.x_min, err, low=0.0, low_open=True)
+    x_max = _checks.number("Calibration.fit.x_max", fit.x_max, err, low=x_min, low_open=True,
+                           why="above x_min; a slope needs two different levels")
+    lo, hi = math.log(x_min), math.log(x_max)
+    _checks.number("Calibration.fit.ln_x_mean", fit.ln_x_mean, err, low=lo, high=hi,
+                   why="the mean of ln(x) lies between ln(x_min) and ln(x_max)")
+    span = hi - lo
+    # n values of ln(x) that include ln(x_min) and ln(x_max): their sum of squared deviations
+    # is at least span^2 / 2 (the others at the mean) and at most n span^2 / 4
+    slack = 1e-9
+    _checks.number("Calibration.fit.ln_x_sxx", fit.ln_x_sxx, err,
+                   low=0.5 * span**2 * (1 - slack), high=0.25 * n * span**2 * (1 + slack),
+                   why=f"the sum of squared deviations of {n} values of ln(x) spanning "
+                       "ln(x_min) .. ln(x_max)")
+    a = _checks.number("Calibration.fit.a", fit.a, err)
+    if a == 0:
+        raise err("Calibration.fit.a = 0.0 is not valid; it must be a finite number other "
+                  "than 0 (with no slope the energy does not determine the level)")
+    b = _checks.number("Calibration.fit.b", fit.b, err)
+    # y <= 1 (per unit of the largest energy): a least-squares fitted value is a projection
+    # of the n values, so |a ln(x) + b| <= sqrt(n) at the fitted levels x_min and x_max
+    bound = math.sqrt(n)
+    for name, ln_x in (("x_min", lo), ("x_max", hi)):
+        y = a * ln_x + b
+        if not abs(y) <= bound:
+            raise err(f"Calibration.fit.a = {a!r}, b = {b!r} are not valid; the fitted "
+                      f"per-unit energy at {name} = {math.exp(ln_x):g}, a ln(x) + b = {y:.4g}, "
+                      f"must lie in [-{bound:.4g}, {bound:.4g}] (sqrt(n): the fit of {n} "
+                      "per-unit energies, each <= 1)")
+    _checks.number("Calibration.fit.r2", fit.r2, err, low=0.0, high=1.0)
+    plain = dataclasses.replace(
+        fit, n=n, a=a, b=b, r2=float(fit.r2), x_min=x_min, x_max=x_max,
+        ln_x_mean=float(fit.ln_x_mean), ln_x_sxx=float(fit.ln_x_sxx))
+    if n < MIN_LEVELS_FOR_INTERVALS:
+        stderrs: dict[str, float] = {}
+        for name in _UNDEFINED_FOR_TWO_POINTS:
+            value = getattr(fit, name)
+            if not (isinstance(value, float) and math.isnan(value)):
+                value = _checks.number(f"Calibration.fit.{name}", value, err, low=0.0,
+                                       why="or null: a fit through 2 points has none")
+            stderrs[name] = value
+        return dataclasses.replace(plain, a_stderr=stderrs["a_stderr"],
+                                   b_stderr=stderrs["b_stderr"],
+                                   residual_std=stderrs["residual_std"])
+    s = _checks.number("Calibration.fit.residual_std", fit.residual_std, err, low=0.0,
+                       high=math.sqrt(n / (n - 2)),
+                       why=f"the residuals of {n} per-unit energies, each <= 1")
+    # the standard errors follow from the other fields (as log_fit computes them)
+    stderrs = {}
+    for name, expected in (("a_stderr", s / math.sqrt(plain.ln_x_sxx)),
+                           ("b_stderr", s * math.sqrt(1 / n + plain.ln_x_mean**2
+                                                      / plain.ln_x_sxx))):
+        value = _checks.number(f"Calibration.fit.{name}", getattr(fit, name), err, low=0.0)
+        if not math.isclose(value, expected, rel_tol=1e-9, abs_tol=1e-300):
+            raise err(f"Calibration.fit.{name} = {value!r} is not valid; it must be "
+                      f"{expected!r}, as residual_std, n, ln_x_mean and ln_x_sxx give it")
+        stderrs[name] = value
+    return dataclasses.replace(plain, a_stderr=stderrs["a_stderr"], b_stderr=stderrs["b_stderr"],
+                               residual_std=s)
 
 
 def _named(cal: Calibration) -> str:
@@ -356,6 +503,10 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
     e = analysis.energy
     y = e.energy / cal.reference_energy
     level = float(cal.fit.inverse(y))
+    if not math.isfinite(level):
+        raise ValueError(f"the block's per-unit energy y = {y:.4g} gives no finite level from "
+                         f"the calibration's fit {cal.fit.equation()}: exp((y - b) / a) "
+                         "overflows; the block is not like the calibration's records")
     scatter = max(e.relative_std, cal.block_relative_std or 0.0)
     half = cal.fit.prediction_half_width(level, confidence, observation_std=y * scatter)
     if math.isfinite(half):

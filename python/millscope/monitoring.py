@@ -96,10 +96,13 @@ class MonitorResult:
     lines_hz: tuple[float, ...]
 
 
-def _length(name: str, value: float, dt: float) -> int:
-    """``value`` s as a whole number (>= 1) of samples of ``dt`` s."""
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} = {value!r} is not valid; it must be > 0 s")
+def _length(name: str, value: float, dt: float, longest: float) -> int:
+    """``value`` s as a whole number (>= 1) of samples of ``dt`` s, at most ``longest`` s (the
+    record's length)."""
+    if not (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value) and 0 < value <= longest + 0.5 * dt):
+        raise ValueError(f"{name} = {value!r} is not valid; it must be in (0, {longest:g}] s, "
+                         "at most the record's length")
     samples = round(value / dt)
     if samples < 1 or abs(samples * dt - value) > 0.5 * dt:
         raise ValueError(f"{name} = {value!r} is not valid; it must be at least one sample "
@@ -122,7 +125,8 @@ def monitor_record(record: TorqueRecord, calibration: Calibration, *,
         Window length, s; it must be the calibration's ``block_s`` (the default), since
         energies grow with the block length.
     step_s : float, optional
-        Step between window starts, s, > 0 (default ``window_s``: windows side by side).
+        Step between window starts, s, in (0, the record's length] (default ``window_s``:
+        windows side by side).
     drive : DriveTrain, optional
         The mill's drive: its lines up to the calibration's band are removed too (not the LTH,
         which is located and removed anyway). Its lifter count must be the calibration's.
@@ -194,11 +198,11 @@ def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s:
                              f"calibration's lifter count, {cal.lifters}")
     analysed = record if cal.band_hz is None else decimate_record(record, cal.band_hz)
     dt = analysed.dt
-    width = _length("window_s", window_s, dt)
-    step = _length("step_s", window_s if step_s is None else step_s, dt)
-    if len(analysed) < width:
+    if analysed.duration_s < window_s - 0.5 * dt:
         raise ValueError(f"the record is {analysed.duration_s:g} s long, shorter than one window "
                          f"of window_s = {window_s:g} s")
+    width = _length("window_s", window_s, dt, analysed.duration_s)
+    step = _length("step_s", window_s if step_s is None else step_s, dt, analysed.duration_s)
     nyquist = 0.5 * analysed.sample_rate_hz
     band = nyquist if cal.band_hz is None else min(cal.band_hz, nyquist)
     lines = () if drive is None else tuple(drive.frequencies_hz(max_hz=band, include_lth=False))
@@ -209,8 +213,8 @@ def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s:
                       NoIntervalWarning, stacklevel=stacklevel)
     if cal.band_hz is None:
         label = f" {cal.label}" if cal.label else ""
-        warnings.warn(f"the calibration{label} has no band_hz (a format-1 file) and no band_hz "
-                      f"was given: the {record.sample_rate_hz:g} Hz record is neither decimated "
+        warnings.warn(f"the calibration{label} gives no band_hz (its band_hz is null, or its "
+                      f"file is of format 1, which has none) and no band_hz was given: the {record.sample_rate_hz:g} Hz record is neither decimated "
                       f"nor band-limited, its energy counted up to {nyquist:g} Hz; if the "
                       "calibration's records were sampled slower, the levels are biased. Pass "
                       "band_hz= (command line --band-hz), the Nyquist frequency of the "

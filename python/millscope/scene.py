@@ -5,17 +5,24 @@ A :class:`Scene` is a drum (:class:`Drum`, with optional :class:`Lifters`), a ch
 (restitution, friction) for every pair of materials in use, plus the rotation speed.
 Everything is SI (m, kg, Pa, s, rad/s, Hz). Every class checks its fields on construction and
 raises ``ValueError`` naming the class, the field, the value and the valid range, e.g.
-``Fraction.diameter = -0.01 m is not valid; it must be > 0``. Numbers may be given as Python
+``Fraction.diameter = -0.01 m is not valid; it must be in [0.0001, 20] m``. Numbers may be given as Python
 or numpy ints and floats and are stored as ``float``; bools, NaN and infinities are refused.
 
 Scenes round-trip through plain JSON-able dicts (:meth:`Scene.to_dict`,
-:meth:`Scene.from_dict`), which is how records and checkpoints carry them.
+:meth:`Scene.from_dict`), which is how records and checkpoints carry them, and through JSON
+files (:meth:`Scene.load`). Every number has a range a mill can have, so that nothing computed
+from a scene overflows: a drum 0.05 to 20 m across and up to 50 m long, spheres of at least
+0.1 mm, materials of 1 to 1e5 kg/m^3 and 1 to 1e12 Pa, restitution in [0.01, 1], friction up to 10,
+gravity up to 1000 m/s^2, at most 2**31 - 1 spheres. A dict or file that is not a valid
+scene raises :class:`SceneError` (a ``ValueError``) naming the field, its value and the valid
+range.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from numbers import Integral, Real
@@ -24,7 +31,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .contact import rayleigh_time
+from ._checks import as_float, show
+from ._files import MAX_JSON_BYTES, read_json
+from .contact import MIN_RESTITUTION, rayleigh_time
+from .spectral import MAX_LIFTERS
 
 __all__ = [
     "CRITICAL_SPEED_CONVENTIONS",
@@ -38,6 +48,7 @@ __all__ = [
     "Material",
     "Pair",
     "Scene",
+    "SceneError",
 ]
 
 SCENE_FORMAT = "millscope-scene-1"  # the "format" key of Scene.to_dict
@@ -45,6 +56,21 @@ RANDOM_CLOSE_PACKING = 0.64  # the largest solid fraction a random bed of sphere
 MAX_SPEED_FRACTION = 3.0  # speed_fraction in (0, 3]
 CRITICAL_SPEED_CONVENTIONS = ("ball", "drum")
 LIFTER_PROFILES = ("rectangular", "trapezoidal")
+#: Drum diameters, m: a 5 cm laboratory jar to beyond the largest mills (about 12 m).
+DRUM_DIAMETER_RANGE = (0.05, 20.0)
+MAX_DRUM_LENGTH = 50.0  # m: tube mills are up to about 15 m long
+MIN_SPHERE_DIAMETER = 1e-4  # m: 0.1 mm
+#: The engine indexes spheres with 32-bit integers.
+MAX_SPHERES = 2**31 - 1
+MAX_DENSITY = 1e5  # kg/m^3: osmium, the densest element, has 22590
+MAX_SHEAR_MODULUS = 1e12  # Pa: diamond has 4.8e11
+MAX_FRICTION = 10.0  # measured static friction coefficients stay below about 1.5
+MAX_GRAVITY = 1000.0  # m/s^2
+
+
+class SceneError(ValueError):
+    """A scene dict or file that cannot be used; the message names the field, its value and the
+    valid range."""
 
 
 # -- validation helpers ------------------------------------------------------------------------
@@ -56,10 +82,8 @@ def _is_real(value: object) -> bool:
 
 def _show(value: object) -> str:
     """A value as error messages print it: numbers plainly (no ``np.float64(...)``)."""
-    if isinstance(value, Integral) and not isinstance(value, (bool, np.bool_)):
-        return repr(int(value))
     if _is_real(value):
-        return repr(float(value))  # type: ignore[arg-type]
+        return show(value)
     return repr(value)
 
 
@@ -71,9 +95,10 @@ def _fail(where: str, value: object, valid: str, unit: str = "") -> ValueError:
 
 def _real(where: str, value: object, unit: str, valid: str) -> float:
     """A finite real number as float; ``valid`` is the range the caller goes on to check."""
-    if not _is_real(value) or not math.isfinite(float(value)):  # type: ignore[arg-type]
+    x = as_float(value) if not isinstance(value, np.bool_) else math.nan
+    if not math.isfinite(x):
         raise _fail(where, value, f"a finite number {valid}".rstrip(), unit)
-    return float(value)  # type: ignore[arg-type]
+    return x
 
 
 def _positive(where: str, value: object, unit: str = "") -> float:
@@ -83,9 +108,24 @@ def _positive(where: str, value: object, unit: str = "") -> float:
     return x
 
 
-def _count(where: str, value: object) -> int:
-    if not isinstance(value, Integral) or isinstance(value, (bool, np.bool_)) or value < 1:
-        raise _fail(where, value, "an integer >= 1")
+def _between(where: str, value: object, low: float, high: float, unit: str = "",
+             low_open: bool = False, why: str = "") -> float:
+    """A finite real number in [low, high] (or (low, high]) as float; ``why`` the range is
+    what it is goes into the message."""
+    unit_text = f" {unit}" if unit else ""
+    reason = f" ({why})" if why else ""
+    valid = f"in {'(' if low_open else '['}{low:g}, {high:g}]{unit_text}{reason}"
+    x = _real(where, value, unit, valid)
+    if not ((x > low if low_open else x >= low) and x <= high):
+        raise _fail(where, value, valid, unit)
+    return x
+
+
+def _count(where: str, value: object, high: int | None = None) -> int:
+    if (not isinstance(value, Integral) or isinstance(value, (bool, np.bool_))
+            or int(value) < 1 or (high is not None and int(value) > high)):
+        raise _fail(where, value, "an integer >= 1" if high is None else
+                    f"an integer in [1, {high}]")
     return int(value)
 
 
@@ -135,9 +175,9 @@ class Material:
     name : str
         Non-empty, unique within a scene.
     density : float
-        rho, kg/m^3, > 0.
+        rho, kg/m^3, in [1, 1e5] (osmium, the densest element, has 22590).
     shear_modulus : float
-        G, Pa, > 0.
+        G, Pa, in [1, 1e12] (diamond has 4.8e11).
     poisson : float
         Poisson ratio nu, in (-1, 0.5).
     """
@@ -149,8 +189,9 @@ class Material:
 
     def __post_init__(self) -> None:
         name = _text("Material.name", self.name)
-        density = _positive("Material.density", self.density, "kg/m^3")
-        shear_modulus = _positive("Material.shear_modulus", self.shear_modulus, "Pa")
+        density = _between("Material.density", self.density, 1.0, MAX_DENSITY, "kg/m^3")
+        shear_modulus = _between("Material.shear_modulus", self.shear_modulus, 1.0,
+                                 MAX_SHEAR_MODULUS, "Pa")
         nu = _real("Material.poisson", self.poisson, "", "in (-1, 0.5)")
         if not -1.0 < nu < 0.5:
             raise _fail("Material.poisson", self.poisson, "in (-1, 0.5)")
@@ -180,9 +221,10 @@ class Pair:
     a, b : str
         Material names; the pair is unordered.
     restitution : float
-        Coefficient of restitution e, in (0, 1].
+        Coefficient of restitution e, in [0.01, 1] (``MIN_RESTITUTION``: below it the damped
+        contact law does not give the asked rebound, :mod:`millscope.contact`).
     friction : float
-        Static friction coefficient mu_s of eq. (8), >= 0.
+        Static friction coefficient mu_s of eq. (8), in [0, 10].
     """
 
     a: str
@@ -192,12 +234,8 @@ class Pair:
 
     def __post_init__(self) -> None:
         a, b = _text("Pair.a", self.a), _text("Pair.b", self.b)
-        e = _real("Pair.restitution", self.restitution, "", "in (0, 1]")
-        if not 0.0 < e <= 1.0:
-            raise _fail("Pair.restitution", self.restitution, "in (0, 1]")
-        mu = _real("Pair.friction", self.friction, "", ">= 0")
-        if mu < 0.0:
-            raise _fail("Pair.friction", self.friction, ">= 0")
+        e = _between("Pair.restitution", self.restitution, MIN_RESTITUTION, 1.0)
+        mu = _between("Pair.friction", self.friction, 0.0, MAX_FRICTION)
         _set(self, a=a, b=b, restitution=e, friction=mu)
 
     @property
@@ -240,7 +278,7 @@ class Lifters:
     phase: float = 0.0
 
     def __post_init__(self) -> None:
-        count = _count("Lifters.count", self.count)
+        count = _count("Lifters.count", self.count, MAX_LIFTERS)
         width = _positive("Lifters.width", self.width, "m")
         height = _positive("Lifters.height", self.height, "m")
         profile = _choice("Lifters.profile", self.profile, LIFTER_PROFILES)
@@ -288,9 +326,10 @@ class Drum:
     Attributes
     ----------
     diameter : float
-        Inner diameter D, m, > 0.
+        Inner diameter D, m, in [0.05, 20].
     length : float
-        Inner length L, m, > 0 (the period along the axis when ``end_walls`` is False).
+        Inner length L, m, in (0, 50] (the period along the axis when ``end_walls`` is
+        False).
     material : str
         Name of the drum's material (shell, lifters and end walls).
     end_walls : bool
@@ -307,7 +346,7 @@ class Drum:
     lifters: Lifters | None = None
 
     def __post_init__(self) -> None:
-        diameter = _positive("Drum.diameter", self.diameter, "m")
+        diameter = _between("Drum.diameter", self.diameter, *DRUM_DIAMETER_RANGE, "m")
         radius = 0.5 * diameter
         lift = self.lifters
         if lift is not None:
@@ -327,7 +366,8 @@ class Drum:
         _set(
             self,
             diameter=diameter,
-            length=_positive("Drum.length", self.length, "m"),
+            length=_between("Drum.length", self.length, 0.0, MAX_DRUM_LENGTH, "m",
+                            low_open=True),
             material=_text("Drum.material", self.material),
             end_walls=_flag("Drum.end_walls", self.end_walls),
         )
@@ -368,9 +408,10 @@ class Fraction:
     material : str
         Name of the material.
     diameter : float
-        Sphere diameter d, m, > 0.
+        Sphere diameter d, m, in [0.0001, 20] (and below the gap to the axis, checked by
+        :class:`Scene`).
     count : int
-        Number of spheres, >= 1.
+        Number of spheres, in [1, 2**31 - 1].
     name : str
         A label such as "balls" or "particles", unique within a scene; "" (the default)
         stands for the material name.
@@ -386,8 +427,9 @@ class Fraction:
         _set(
             self,
             material=material,
-            diameter=_positive("Fraction.diameter", self.diameter, "m"),
-            count=_count("Fraction.count", self.count),
+            diameter=_between("Fraction.diameter", self.diameter, MIN_SPHERE_DIAMETER,
+                              DRUM_DIAMETER_RANGE[1], "m"),
+            count=_count("Fraction.count", self.count, MAX_SPHERES),
             name=_text("Fraction.name", self.name, empty=True) or material,
         )
 
@@ -427,13 +469,13 @@ class Scene:
     speed_fraction : float or None
         Rotation speed as a fraction of the critical speed, in (0, 3].
     speed_hz : float or None
-        Rotation frequency, Hz, >= 0 (0: the drum at rest). Exactly one of ``speed_fraction``
-        and ``speed_hz`` is given.
+        Rotation frequency, Hz, in [0, 3 x the critical speed] (0: the drum at rest). Exactly
+        one of ``speed_fraction`` and ``speed_hz`` is given.
     critical_speed_convention : {"ball", "drum"}
         omega_c = sqrt(2 g / (D - d_max)) ("ball", DESIGN.md section 2) or sqrt(2 g / D)
         ("drum"), d_max the largest sphere diameter.
     gravity : float
-        g, m/s^2, > 0, acting along -y.
+        g, m/s^2, in (0, 1000], acting along -y.
     clamp_normal_force : bool
         Clamp the total normal force at zero (off by default, as in EDEM and LIGGGHTS).
     name : str
@@ -475,8 +517,12 @@ class Scene:
         for k, f in enumerate(charge):
             if f.material not in index:
                 raise _fail(f"Scene.charge[{k}].material", f.material, known)
+        spheres = sum(f.count for f in charge)
+        if spheres > MAX_SPHERES:
+            raise _fail("Scene.charge", f"{spheres} spheres",
+                        f"at most {MAX_SPHERES} spheres (the engine indexes them with 32-bit "
+                        "integers)")
         self._check_pairs()
-        self._check_speed()
         _set(
             self,
             critical_speed_convention=_choice(
@@ -484,11 +530,13 @@ class Scene:
                 self.critical_speed_convention,
                 CRITICAL_SPEED_CONVENTIONS,
             ),
-            gravity=_positive("Scene.gravity", self.gravity, "m/s^2"),
+            gravity=_between("Scene.gravity", self.gravity, 0.0, MAX_GRAVITY, "m/s^2",
+                             low_open=True),
             clamp_normal_force=_flag("Scene.clamp_normal_force", self.clamp_normal_force),
             name=_text("Scene.name", self.name, empty=True),
         )
         self._check_room()
+        self._check_speed()
 
     def _check_pairs(self) -> None:
         labels = [p.label for p in self.pairs]
@@ -531,10 +579,8 @@ class Scene:
                 raise _fail("Scene.speed_fraction", self.speed_fraction, valid)
             _set(self, speed_fraction=s)
         else:
-            hz = _real("Scene.speed_hz", self.speed_hz, "Hz", ">= 0")
-            if hz < 0.0:
-                raise _fail("Scene.speed_hz", self.speed_hz, ">= 0", "Hz")
-            _set(self, speed_hz=hz)
+            top = MAX_SPEED_FRACTION * self.critical_speed_rad_s / (2.0 * math.pi)
+            _set(self, speed_hz=_between("Scene.speed_hz", self.speed_hz, 0.0, top, "Hz"))
 
     def _check_room(self) -> None:
         drum = self.drum
@@ -732,12 +778,34 @@ class Scene:
         return out
 
     @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Scene:
+        """Read a scene JSON file (:meth:`to_dict` written with ``json.dump``); a missing or
+        unreadable file, one larger than ``MAX_JSON_BYTES``, invalid JSON or an invalid scene
+        (as :meth:`from_dict` checks it) raises :class:`SceneError` naming the file."""
+        data = read_json(path, "scene", SceneError, MAX_JSON_BYTES)
+        try:
+            return cls.from_dict(data)
+        except SceneError as exc:
+            raise SceneError(f"{path}: {exc}") from None
+
+    @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Scene:
         """The Scene of a :meth:`to_dict` dict, validated.
 
         Keys whose field has a default may be left out; an unknown key, a missing required
-        key or a ``"format"`` other than ``"millscope-scene-1"`` raises ``ValueError``.
+        key, a ``"format"`` other than ``"millscope-scene-1"`` or any field out of its range
+        raises :class:`SceneError`.
         """
+        try:
+            return cls._from_dict(d)
+        except SceneError:
+            raise
+        except ValueError as exc:
+            raise SceneError(str(exc)) from None
+
+    @classmethod
+    def _from_dict(cls, d: Mapping[str, Any]) -> Scene:
+        """:meth:`from_dict`, raising ValueError."""
         if not isinstance(d, Mapping):
             raise ValueError(
                 f"Scene.from_dict needs a mapping (a dict from Scene.to_dict), not "

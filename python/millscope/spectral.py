@@ -7,13 +7,22 @@ Every function takes a :class:`~millscope.record.TorqueRecord` (usually a block 
 plain 1-D array together with ``sample_rate_hz``.
 
 Windows: ``"hann"`` (symmetric, eq. 10, the default), ``"hann_periodic"`` and ``"rectangular"``.
+
+Every function divides the block by the power of two nearest above its largest |sample| before
+the C++ core squares anything, and multiplies the results back by that power (squared for
+energies and powers). A power of two changes no digit of a normal float, so the results are
+those of the unscaled block, bit for bit, whenever that one does not overflow; and torque
+whose squares would overflow (above about 1e154 N m) still gives finite results. A result that
+is itself beyond the float range (e.g. an energy above 1.8e308 (N m)^2 s) raises ValueError.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from numbers import Integral
 from typing import Literal
 
 import numpy as np
@@ -35,6 +44,7 @@ __all__ = [
     "band_stop",
     "LTH_CLEAR_BINS",
     "PEAK_DISTINCT_RATIO",
+    "MAX_LIFTERS",
 ]
 
 WindowName = Literal["hann", "hann_periodic", "rectangular"]
@@ -47,6 +57,8 @@ _WINDOWS = ("hann", "hann_periodic", "rectangular")
 #: of lifters x rotation frequency, to lie clear of the mean's main lobe (2 bins with the Hann
 #: window) with a bin to spare.
 LTH_CLEAR_BINS = 6.0
+#: The most lifter bars a drum may have (a bar every 3 mm of the shell of a 10 m drum).
+MAX_LIFTERS = 10_000
 
 
 def _samples(data: Samples, sample_rate_hz: float | None) -> tuple[NDArray[np.float64], float]:
@@ -67,6 +79,40 @@ def _samples(data: Samples, sample_rate_hz: float | None) -> tuple[NDArray[np.fl
     if not (np.isfinite(fs) and fs > 0):
         raise ValueError(f"sample_rate_hz = {sample_rate_hz!r} is not valid; it must be > 0")
     return x, fs
+
+
+@dataclass(frozen=True)
+class _Scale:
+    """A block divided by 2**k, the power of two at or just above its largest |sample| (k = 0
+    for a block of zeros): the scaled samples are at most 1 in size, so their squares cannot
+    overflow, and the division is exact."""
+
+    k: int
+    peak: float  # the largest |sample| of the block itself
+
+    def back(self, value: NDArray[np.float64], power: int, what: str) -> NDArray[np.float64]:
+        """``value`` x (2**k)**power, exactly, for a result of the scaled samples that is of
+        their ``power`` (1 for amplitudes, 2 for energies); ValueError naming ``what`` and the
+        largest samples that keep it finite when it leaves the float range."""
+        with np.errstate(over="ignore"):
+            out = np.ldexp(value, power * self.k)
+        if not np.all(np.isfinite(out)):
+            largest = float(np.max(np.abs(value)))
+            limit = math.ldexp(self.peak, -self.k) * math.exp(
+                (math.log(sys.float_info.max) - math.log(largest)) / power)
+            raise ValueError(
+                f"the block's {what} exceeds the largest float, {sys.float_info.max:.3g}: its "
+                f"samples reach {self.peak:.3g} in size, and it stays finite for samples up to "
+                f"{limit:.3g}; give the record in larger units (e.g. kN m instead of N m)")
+        return out
+
+
+def _normalised(x: NDArray[np.float64]) -> tuple[NDArray[np.float64], _Scale]:
+    """The samples divided by the power of two at or just above their largest size, and the
+    :class:`_Scale` that multiplies results back."""
+    peak = float(np.max(np.abs(x))) if x.size else 0.0
+    k = math.frexp(peak)[1] if peak > 0 else 0
+    return np.ldexp(x, -k), _Scale(k, peak)
 
 
 def _check_window(window: str) -> None:
@@ -135,12 +181,13 @@ def spectrum(data: Samples, *, window: WindowName = "hann", sample_rate_hz: floa
     _check_window(window)
     x, fs = _samples(data, sample_rate_hz)
     _check_resolution(x.size, fs, resolution_hz)
-    amplitude, power, psd = _core.spectra(x, fs, window)
+    unit, scale = _normalised(x)
+    amplitude, power, psd = _core.spectra(unit, fs, window)
     return Spectrum(
         freq=_core.bin_frequencies(x.size, fs),
-        amplitude=amplitude,
-        psd=psd,
-        power=power,
+        amplitude=scale.back(amplitude, 1, "spectrum amplitude"),
+        psd=scale.back(psd, 2, "power spectral density"),
+        power=scale.back(power, 2, "spectrum power"),
         window=window,
         resolution_hz=fs / x.size,
     )
@@ -156,12 +203,21 @@ def window_factors(window: WindowName, n: int) -> _core.WindowFactors:
 
 
 def lifter_harmonic_hz(n_lifters: int, rotation_hz: float) -> float:
-    """Frequency of the lifter torque harmonic, n_lifters x rotation frequency (section 6.2), Hz."""
-    if int(n_lifters) != n_lifters or n_lifters < 1:
-        raise ValueError(f"n_lifters = {n_lifters!r} is not valid; it must be an integer >= 1")
+    """Frequency of the lifter torque harmonic, n_lifters x rotation frequency (section 6.2), Hz.
+
+    ``n_lifters`` is an integer in [1, ``MAX_LIFTERS``]; the result must be finite."""
+    whole = (isinstance(n_lifters, Integral) and not isinstance(n_lifters, bool)) or (
+        isinstance(n_lifters, float) and float(n_lifters).is_integer())
+    if not whole or not 1 <= n_lifters <= MAX_LIFTERS:
+        raise ValueError(f"n_lifters = {n_lifters!r} is not valid; it must be an integer in "
+                         f"[1, {MAX_LIFTERS}]")
     if not (np.isfinite(rotation_hz) and rotation_hz > 0):
         raise ValueError(f"rotation_hz = {rotation_hz!r} is not valid; it must be > 0 Hz")
-    return float(n_lifters) * float(rotation_hz)
+    lth = float(n_lifters) * float(rotation_hz)
+    if not np.isfinite(lth):
+        raise ValueError(f"rotation_hz = {rotation_hz!r} is not valid; the LTH, "
+                         f"{n_lifters} lifters x rotation_hz, must be finite")
+    return lth
 
 
 #: A located line is told apart from the noise when its amplitude is at least this many times
@@ -241,9 +297,12 @@ def find_peak(data: Samples, near_hz: float, *, search_hz: float | None = None,
     x, fs = _samples(data, sample_rate_hz)
     if search_hz is None:
         search_hz = 3.0 * fs / x.size
-    p = _core.find_peak(x, fs, window, float(near_hz), float(search_hz))
-    return Peak(frequency_hz=p.frequency_hz, amplitude=p.amplitude,
-                noise_amplitude=p.noise_amplitude, local_maximum=p.local_maximum)
+    unit, scale = _normalised(x)
+    p = _core.find_peak(unit, fs, window, float(near_hz), float(search_hz))
+    amplitude = float(scale.back(np.array(p.amplitude), 1, "peak amplitude"))
+    noise = float(scale.back(np.array(p.noise_amplitude), 1, "noise amplitude"))
+    return Peak(frequency_hz=p.frequency_hz, amplitude=amplitude, noise_amplitude=noise,
+                local_maximum=p.local_maximum)
 
 
 @dataclass(frozen=True)
@@ -335,11 +394,12 @@ def spectral_energy(data: Samples, remove: Sequence[RemoveItem] = ("mean",), *,
     _check_window(window)
     x, fs = _samples(data, sample_rate_hz)
     _check_resolution(x.size, fs, resolution_hz)
-    mask = _mask(x, fs, window, remove, bandwidth, band, track_hz)
+    unit, scale = _normalised(x)
+    mask = _mask(unit, fs, window, remove, bandwidth, band, track_hz)
     h = mask.half_width_hz
-    estimate = _core.spectral_energy(x, fs, window, mask)
+    estimate = _core.spectral_energy(unit, fs, window, mask)
     return SpectralEnergy(
-        energy=estimate.energy,
+        energy=float(scale.back(np.array(estimate.energy), 2, "spectral energy")),
         relative_std=estimate.relative_std,
         fraction_kept=mask.fraction_kept,
         removed_hz=tuple((max(0.0, c - h), c + h) for c in mask.centres_hz),
@@ -362,8 +422,9 @@ def band_stop(data: TorqueRecord, remove: Sequence[RemoveItem] = ("mean",), *,
     """
     _check_window(window)
     x, fs = _samples(data, None)
-    mask = _mask(x, fs, window, remove, bandwidth, band, track_hz)
-    y = _core.band_stop(x, window, mask)
+    unit, scale = _normalised(x)
+    mask = _mask(unit, fs, window, remove, bandwidth, band, track_hz)
+    y = scale.back(_core.band_stop(unit, window, mask), 1, "filtered signal")
     return TorqueRecord(data.time_s, y, {**data.meta, "filtered": {
         "removed": [r if isinstance(r, str) else float(r) for r in remove],
         "half_width_hz": mask.half_width_hz, "window": window}})

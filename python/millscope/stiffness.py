@@ -92,6 +92,7 @@ __all__ = [
     "expected_impact_speed",
     "time_step_limit",
     "upper_impact_speed",
+    "wave_speed",
 ]
 
 WALL = "wall"  # the name of the drum in pair labels
@@ -313,6 +314,16 @@ def expected_impact_speed(scene: Scene) -> tuple[float, str]:
     return math.sqrt(2.0 * g * scene.drum.diameter), f"{regime}: free fall across the drum (A5)"
 
 
+def wave_speed(scene: Scene) -> tuple[float, str]:
+    """The slowest bar wave speed sqrt(E / rho) of the materials in use, m/s, and the material
+    that has it: impacts anywhere near it are not elastic, and Hertz contact theory does not
+    hold for them."""
+    _require_scene(scene)
+    speeds = [(math.sqrt(m.youngs_modulus / m.density), m.name)
+              for m in map(scene.material, scene.used_materials())]
+    return min(speeds)
+
+
 def upper_impact_speed(scene: Scene) -> float:
     """v_max = sqrt(2 g D) + w R (A6), m/s: a fall across the drum onto a lifter at rim speed."""
     _require_scene(scene)
@@ -497,7 +508,8 @@ def advise_stiffness(scene: Scene, *, dt: float | None = None, sample_dt: float 
         Upper end of the analysis band, Hz, in (0, 1 / (2 sample_dt)]; default the Nyquist
         frequency 1 / (2 sample_dt).
     impact_speed : float, optional
-        Normal approach speed of the impacts, m/s, > 0; default :func:`expected_impact_speed`.
+        Normal approach speed of the impacts, m/s, in (0, :func:`wave_speed`]; default
+        :func:`expected_impact_speed`.
 
     Returns
     -------
@@ -527,7 +539,10 @@ def advise_stiffness(scene: Scene, *, dt: float | None = None, sample_dt: float 
     if impact_speed is None:
         speed, basis = expected_impact_speed(scene)
     else:
-        speed = _in_range("impact_speed", impact_speed, "m/s", 0.0, math.inf, "> 0 m/s")
+        sound, material = wave_speed(scene)
+        speed = _in_range("impact_speed", impact_speed, "m/s", 0.0, sound,
+                          f"in (0, {sound:.4g}] m/s, below the speed of sound sqrt(E / rho) "
+                          f"in {material!r}, beyond which no contact is elastic (Hertz)")
         basis = "given"
     v_max = max(upper_impact_speed(scene), speed)
 

@@ -66,12 +66,12 @@ import numpy as np
 
 from ._files import atomic_write
 from .analysis import WINDOWS, AnalysisSettings
-from .campaign import Campaign, Case, CaseResult, RunSettings
+from .campaign import MAX_DURATION_S, Campaign, Case, CaseResult, RunSettings
 from .contact import MAX_DT_FRACTION
 from .logfit import log_fit, per_unit
 from .presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
 from .record import TorqueRecord
-from .scene import Scene, _choice, _fail, _positive, _real
+from .scene import Scene, _between, _choice, _fail, _positive, _real
 from .spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
 
 __all__ = [
@@ -118,7 +118,8 @@ class Setting:
         ``"soft"``). A softer charge allows a longer time step (the Rayleigh time grows as
         1 / sqrt(G)).
     record_s : float
-        Length of the analysed block, s, > 0 (the paper's: 10 s).
+        Length of the analysed block, s, > 0 (the paper's: 10 s); warm-up and block together
+        at most ``MAX_DURATION_S`` (3600 s).
     warm_up_s : float
         Rotation before the block, s, >= 0 (the paper's: 4 s). The block is
         ``warm_up_s <= t < warm_up_s + record_s``, time from the start of rotation.
@@ -149,13 +150,14 @@ class Setting:
             g = _real("Setting.shear_modulus_factor", g, "", valid)
             if not 0.0 < g <= 1.0:
                 raise _fail("Setting.shear_modulus_factor", self.shear_modulus_factor, valid)
-        warm = _real("Setting.warm_up_s", self.warm_up_s, "s", ">= 0")
-        if warm < 0.0:
-            raise _fail("Setting.warm_up_s", self.warm_up_s, ">= 0 s", "s")
+        why = f"warm-up and block together are at most {MAX_DURATION_S:g} s of rotation"
+        warm = _between("Setting.warm_up_s", self.warm_up_s, 0.0, MAX_DURATION_S, "s", why=why)
+        record = _between("Setting.record_s", self.record_s, 0.0, MAX_DURATION_S - warm, "s",
+                          low_open=True, why=why)
         values = {
             "dt_fraction": dt,
             "shear_modulus_factor": g,
-            "record_s": _positive("Setting.record_s", self.record_s, "s"),
+            "record_s": record,
             "warm_up_s": warm,
             "sampling": _choice("Setting.sampling", self.sampling, SAMPLINGS),
             "scale": _choice("Setting.scale", self.scale, tuple(SCALES)),

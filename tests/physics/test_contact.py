@@ -406,8 +406,8 @@ def test_bad_material(kwargs: dict[str, float], message: str) -> None:
 
 
 @pytest.mark.parametrize("change, message", [
-    (dict(restitution=0.0), r"restitution = 0\.0 is not valid; it must be in \(0, 1\]"),
-    (dict(restitution=1.2), r"restitution = 1\.2 is not valid; it must be in \(0, 1\]"),
+    (dict(restitution=0.0), r"restitution = 0\.0 is not valid; it must be in \[0\.01, 1\]"),
+    (dict(restitution=1.2), r"restitution = 1\.2 is not valid; it must be in \[0\.01, 1\]"),
     (dict(friction=-0.1), r"friction = -0\.1 is not valid; it must be finite and >= 0"),
     (dict(speed=0.0), r"speed = 0\.0 is not valid; it must be finite and > 0 m/s"),
     (dict(diameter_a=-0.01), r"diameter_a = -0\.01 is not valid; it must be finite and > 0 m"),

@@ -1,0 +1,117 @@
+"""Checks of values read from untrusted input (JSON files, command-line values).
+
+Each check returns the value in its plain Python type or raises the caller's error type (a
+``ValueError`` subclass, one per file format) with the message
+``"<where> = <value> [unit] is not valid; it must be <valid range>"``. Bools are not numbers
+here, and NaN and infinities are refused, so that a value that passes can be computed with.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from numbers import Integral, Real
+from typing import Any
+
+__all__ = ["as_float", "keys", "integer", "number", "show"]
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, Real) and not isinstance(value, bool)
+
+
+def as_float(value: object) -> float:
+    """``value`` as a float when it is a real number (not a bool), else nan; an integer too
+    large for a float is inf."""
+    if not _is_number(value):
+        return math.nan
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except OverflowError:
+        return math.inf
+
+
+def show(value: object) -> str:
+    """A value as error messages print it: numbers plainly (no ``np.float64(...)``), long
+    values cut short."""
+    if isinstance(value, Integral) and _is_number(value):
+        n = int(value)
+        text = str(n) if abs(n) < 10**30 else \
+            f"{'-' if n < 0 else ''}~1e{int(abs(n).bit_length() * math.log10(2))}"
+    elif _is_number(value):
+        text = repr(float(value))  # type: ignore[arg-type]
+    else:
+        text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _range(low: float, high: float, low_open: bool, high_open: bool) -> str:
+    if high == math.inf:
+        return f"{'>' if low_open else '>='} {low:g}"
+    if low == -math.inf:
+        return f"{'<' if high_open else '<='} {high:g}"
+    return f"in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+
+
+def number(where: str, value: object, error: type[ValueError], *, low: float = -math.inf,
+           high: float = math.inf, low_open: bool = False, high_open: bool = False,
+           unit: str = "", why: str = "") -> float:
+    """``value`` as a float when it is a finite real number within the bounds, else ``error``.
+
+    Parameters
+    ----------
+    where : str
+        The value's name in the message, e.g. ``"calibration.fit.a"``.
+    value : object
+        What was read.
+    error : type
+        The ``ValueError`` subclass to raise.
+    low, high : float
+        Bounds, in the value's unit.
+    low_open, high_open : bool
+        Whether the bounds themselves are excluded.
+    unit : str
+        Unit for the message (e.g. ``"Hz"``).
+    why : str
+        Why the range is what it is, appended to the message.
+    """
+    x = as_float(value)
+    inside = ((x > low if low_open else x >= low) and (x < high if high_open else x <= high))
+    if not (math.isfinite(x) and inside):
+        unit_text = f" {unit}" if unit else ""
+        shown = f"{show(value)}{unit_text}" if _is_number(value) else show(value)
+        reason = f" ({why})" if why else ""
+        raise error(f"{where} = {shown} is not valid; it must be a finite number "
+                    f"{_range(low, high, low_open, high_open)}{unit_text}{reason}")
+    return x
+
+
+def integer(where: str, value: object, error: type[ValueError], *, low: int,
+            high: int | None = None, why: str = "") -> int:
+    """``value`` as an int when it is an integer (not a bool, not a float) in [low, high],
+    else ``error``."""
+    ok = isinstance(value, Integral) and _is_number(value)
+    n = int(value) if ok else 0  # type: ignore[call-overload]
+    if not ok or n < low or (high is not None and n > high):
+        valid = f">= {low}" if high is None else f"in [{low}, {high}]"
+        reason = f" ({why})" if why else ""
+        raise error(f"{where} = {show(value)} is not valid; it must be an integer "
+                    f"{valid}{reason}")
+    return n
+
+
+def keys(where: str, data: object, error: type[ValueError], allowed: tuple[str, ...],
+         required: tuple[str, ...] = ()) -> Mapping[str, Any]:
+    """``data`` when it is a JSON object holding every key of ``required`` and no key outside
+    ``allowed`` (a misspelt key is not silently ignored), else ``error``."""
+    if not isinstance(data, Mapping):
+        raise error(f"{where} must be a JSON object with the keys {', '.join(allowed)}; got "
+                    f"{type(data).__name__}")
+    missing = [k for k in required if k not in data]
+    if missing:
+        raise error(f"{where}: missing key {', '.join(repr(k) for k in missing)}")
+    unknown = [show(k) for k in data if k not in allowed]
+    if unknown:
+        raise error(f"{where}: unknown key {', '.join(unknown)}; the keys are "
+                    f"{', '.join(allowed)}")
+    return data
