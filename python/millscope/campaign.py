@@ -236,7 +236,7 @@ class Case:
         if s.dt is not None and s.dt > limit.dt:
             raise _fail("RunSettings.dt", s.dt,
                         f"{limit.valid_range()} (scene {self.scene.name or 'scene'!r})", "s")
-        dt = limit.default_dt("RunSettings.dt") if s.dt is None else s.dt
+        dt = limit.default_dt() if s.dt is None else s.dt
         if s.sample_dt < dt:
             raise _fail("RunSettings.sample_dt", s.sample_dt,
                         f">= the time step dt = {dt:.6g} s of scene {self.scene.name or 'scene'!r}",

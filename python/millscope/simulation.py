@@ -130,12 +130,12 @@ class Simulation:
         Seed of the filling (positions and jitter); the same seed gives the same run.
     dt : float, optional
         Time step, s. Default: ``DEFAULT_DT_FRACTION`` (0.2) x the smallest Rayleigh time of the
-        charge. A step above the scene's limit (:func:`millscope.stiffness.time_step_limit`:
-        0.8 x the velocity-Verlet stability bound of the fastest damped normal or
-        tangential-rotational stick mode of its contacts at the upper impact speed, and at most
-        ``MAX_DT_FRACTION`` (0.5) x that Rayleigh time) raises ``ValueError`` naming the
-        limit, the pair of fractions and the mode that set it; so does the default when it
-        is above the limit.
+        charge, or the scene's limit where that is smaller (heavily damped contacts). A step
+        above the limit (:func:`millscope.stiffness.time_step_limit`: 0.8 x the
+        velocity-Verlet stability bound of the fastest damped normal or tangential-rotational
+        stick mode of its contacts at the upper impact speed, and at most ``MAX_DT_FRACTION``
+        (0.5) x that Rayleigh time) raises ``ValueError`` naming the limit, the pair of
+        fractions and the mode that set it.
     threads : int, optional
         OpenMP threads of the engine, in [1, the cores this process may use] (else
         ``ValueError``, see :func:`check_threads`); default: all those cores. Runs are

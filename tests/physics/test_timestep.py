@@ -288,16 +288,15 @@ def test_paper_stiffness_keeps_the_rayleigh_cap() -> None:
                                         "the charge")
 
 
-def test_a_scene_whose_default_step_is_unstable_must_be_given_one() -> None:
-    """Every pair at e = 0.01 (zeta_t = 1.41): the stick mode's limit falls below 0.2 T_R."""
+def test_a_scene_whose_default_step_is_unstable_defaults_to_its_limit() -> None:
+    """Every pair at e = 0.01 (zeta_t = 1.41): the stick mode's limit falls below 0.2 T_R, and
+    the default step is the limit; a step just above it is refused, naming the mode."""
     scene = LD_TINY.replace(pairs=tuple(replace(p, restitution=0.01) for p in LD_TINY.pairs))
     limit = time_step_limit(scene)
     assert limit.dt < DEFAULT_DT_FRACTION * limit.rayleigh_time
-    with pytest.raises(ValueError, match=r"dt = None \(the default, 0\.2 x the Rayleigh time = "
-                                         r".* s\) is not valid for this scene; give a step in "
-                                         r"\(0, .*tangential-rotational stick"):
-        ms.Simulation(scene, threads=1)
-    assert ms.Simulation(scene, dt=limit.dt, threads=1).dt == limit.dt
+    assert ms.Simulation(scene, threads=1).dt == limit.dt
+    with pytest.raises(ValueError, match=r"tangential-rotational stick"):
+        ms.Simulation(scene, dt=1.01 * limit.dt, threads=1)
 
 
 @pytest.mark.parametrize("particles", [None, "ceramic", "steel"])
