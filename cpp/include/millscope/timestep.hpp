@@ -17,8 +17,12 @@
 // against c_s of 750-3200 m/s). A particle in a dense bed has several contacts at once, which
 // raises its highest frequency by up to about sqrt(coordination) ~ 2-3: hence a margin of 2
 // is the least to accept, and the default 0.2 T_R (10 or more steps per impact; EDEM's usual
-// 20-40 %) is what results should be computed with. Scenes with a reduced shear modulus move
-// v / c_s up and must also be checked against hertz_stability_dt (the stiffness advisor does).
+// 20-40 %) is what results should be computed with. This cap covers the undamped normal mode
+// only: damping and the tangential stick mode coupled with rotation (about sqrt(3.5) faster,
+// damped by the pair's restitution) lower the bound, and with a reduced shear modulus they set
+// it below 0.5 T_R. The Python layer derives the limit from those modes for each scene
+// (millscope.stiffness.time_step_limit) and refuses a step above it before the engine is made;
+// this cap is the engine's last line.
 #pragma once
 
 #include <cmath>
