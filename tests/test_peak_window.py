@@ -65,9 +65,11 @@ def test_only_a_slope_in_the_window_is_no_local_maximum() -> None:
 
 def test_noise_peaks_are_rarely_called_distinct_and_lines_are() -> None:
     """For Gaussian noise a bin's amplitude is Rayleigh distributed: it exceeds 3 x the median
-    with probability 2**-9 per bin, so a 7-bin search calls a noise peak distinct in about
-    1.4 % of blocks (fewer: a Hann window correlates neighbouring bins). A line of 8 times
-    the noise's median bin amplitude stands out in every block."""
+    with probability 2**-9 per bin. The largest of 7 bins, refined between bins and compared
+    with a median estimated from 44 bins, is called distinct in about 3 % of noise-only
+    blocks (spectral.PEAK_DISTINCT_RATIO); 6 % is a bound four standard deviations above it
+    for 400 blocks. A line of 8 times the noise's median bin amplitude stands out in every
+    block."""
     fs, n, f0 = 100.0, 1000, 8.661
     rng = np.random.default_rng(3)
     # median bin amplitude of unit white noise, Hann: 2 sqrt(ln 2 sum w^2) / sum w
@@ -75,7 +77,7 @@ def test_noise_peaks_are_rarely_called_distinct_and_lines_are() -> None:
     median_amplitude = 2 * np.sqrt(np.log(2) * np.sum(w**2)) / np.sum(w)
     noise_only = [ms.find_peak(rng.normal(0, 1, n), f0, sample_rate_hz=fs) for _ in range(400)]
     false_alarms = sum(p.distinct for p in noise_only)
-    assert false_alarms <= 16  # 4 %: the expected count is at most 5.6
+    assert false_alarms <= 24
     # the noise estimate itself against the Rayleigh median
     assert np.median([p.noise_amplitude for p in noise_only]) == pytest.approx(
         median_amplitude, rel=0.05)

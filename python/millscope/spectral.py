@@ -223,7 +223,10 @@ def lifter_harmonic_hz(n_lifters: int, rotation_hz: float) -> float:
 #: A located line is told apart from the noise when its amplitude is at least this many times
 #: the median amplitude of the bins around it. For Gaussian noise a bin's amplitude is
 #: Rayleigh distributed, so it exceeds c times the median with probability 2**(-c**2): 0.2 %
-#: per bin at c = 3, about 1.4 % somewhere in a search of 7 bins.
+#: per bin at c = 3. The located peak is the largest of the window's bins, refined between
+#: bins (which raises it) and compared with a median estimated from 44 bins, so noise alone
+#: is called distinct more often than 7 x 0.2 %: in 57 of 2000 blocks of white noise (10 s
+#: Hann blocks, the default +-3 bins), about 3 %.
 PEAK_DISTINCT_RATIO = 3.0
 
 
