@@ -211,12 +211,18 @@ def test_text_and_markdown_reports_name_every_contact_and_the_verdict() -> None:
                      r"particles \(ceramic\) - drum \(steel\)"),
     (dict(dt=1.0), r"dt = 1\.0 s is not valid; it must be in \(0, "),
     (dict(dt=math.nan), r"dt = nan s is not valid"),
-    (dict(sample_dt=1e-6), r"sample_dt = 1e-06 s is not valid; it must be >= the time step "
-                           r"dt = "),
+    (dict(sample_dt=1e-6), r"sample_dt = 1e-06 s is not valid; it must be in \[dt = "),
+    # above 1 / (2 LTH), the samples cannot resolve the LTH at 16 x 0.5413 Hz
+    (dict(sample_dt=1e308), r"sample_dt = 1e\+308 s is not valid; it must be in \[dt = .*, "
+                            r"0\.0577.*\] s, so that the Nyquist frequency is above the LTH "
+                            r"at 8\.661 Hz"),
     (dict(sample_dt="0.01"), r"sample_dt = '0\.01' s is not valid"),
     (dict(analysis_band_hz=80.0), r"analysis_band_hz = 80\.0 Hz is not valid; it must be in "
-                                  r"\(0, 50\] Hz, the Nyquist frequency of sample_dt = 0\.01 s"),
+                                  r"\[8\.661, 50\] Hz: from the LTH to the Nyquist frequency of "
+                                  r"sample_dt = 0\.01 s"),
     (dict(analysis_band_hz=0.0), r"analysis_band_hz = 0\.0 Hz is not valid"),
+    (dict(analysis_band_hz=1e-308), r"analysis_band_hz = 1e-308 Hz is not valid; it must be in "
+                                    r"\[8\.661, 50\]"),
     (dict(impact_speed=-2.0), r"impact_speed = -2\.0 m/s is not valid; it must be in \(0, "),
     (dict(impact_speed=math.inf), r"impact_speed = inf m/s is not valid"),
 ])

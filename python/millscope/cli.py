@@ -161,8 +161,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     print(f"# windows of {result.window_s:g} s every {result.step_s:g} s: "
           f"{len(result.windows)}; removed: mean, LTH near "
           f"{calibration.lifters * calibration.rotation_hz:.3f} Hz, drive lines: {lines}")
-    for w in caught:
-        print(f"# warning: {w.message}")
+    for caught_warning in caught:
+        print(f"# warning: {caught_warning.message}")
     percent = f"{100 * args.confidence:g}"
     print(f"{'start_s':>9} {'end_s':>9} {'level':>8} {'low_' + percent:>8} "
           f"{'high_' + percent:>8}  flag")
@@ -349,7 +349,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("analyze", help="analyse a torque record (CSV or npz)",
                        description="Mean torque, lifter torque harmonic and spectral energy of a "
                                    "torque record; writes spectrum and filtered-signal plots.")
-    p.add_argument("file", help="CSV with columns time_s,torque_Nm (or a .npz record)")
+    p.add_argument("file", help="torque record: a CSV or text export (columns, units, separator "
+                   "and decimal mark sniffed, or given by the options below) or a .npz record")
     p.add_argument("--lifters", type=_positive_int, required=True, help="number of lifters")
     p.add_argument("--rotation-hz", type=_positive_float, required=True,
                    help="mill rotation frequency, Hz")
@@ -376,7 +377,8 @@ def build_parser() -> argparse.ArgumentParser:
                                    "torque record and prints one line per window: start and "
                                    "end (s), estimated load level, its interval, and 'outside' "
                                    "when the level lies outside the calibrated range.")
-    p.add_argument("file", help="CSV with columns time_s,torque_Nm (or a .npz record)")
+    p.add_argument("file", help="torque record: a CSV or text export (columns, units, separator "
+                   "and decimal mark sniffed, or given by the options below) or a .npz record")
     p.add_argument("--calibration", required=True,
                    help="calibration JSON (Calibration.save, or report's calibration_*.json)")
     p.add_argument("--drive", help="drive.json describing motor and gears: their lines are removed")

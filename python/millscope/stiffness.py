@@ -499,9 +499,11 @@ def advise_stiffness(scene: Scene, *, dt: float | None = None, sample_dt: float 
         Time step, s, in (0, the scene's limit] (:func:`time_step_limit`, as the engine);
         default DEFAULT_DT_FRACTION x the smallest Rayleigh time (the engine's default).
     sample_dt : float
-        Torque sampling interval, s, >= dt (0.01 s in the paper).
+        Torque sampling interval, s, in [dt, 1 / (2 f)] (0.01 s in the paper), where f is the
+        LTH (lifters x rotation frequency; the rotation frequency without lifters): the
+        samples must resolve the line the method reads.
     analysis_band_hz : float, optional
-        Upper end of the analysis band, Hz, in (0, 1 / (2 sample_dt)]; default the Nyquist
+        Upper end of the analysis band, Hz, in [f, 1 / (2 sample_dt)]; default the Nyquist
         frequency 1 / (2 sample_dt).
     impact_speed : float, optional
         Normal approach speed of the impacts, m/s, in (0, :func:`wave_speed`]; default
@@ -525,13 +527,19 @@ def advise_stiffness(scene: Scene, *, dt: float | None = None, sample_dt: float 
     t_rayleigh, stiffest = scene.min_rayleigh_time()
     limit = time_step_limit(scene)
     dt = limit.default_dt() if dt is None else limit.check(dt)
-    sample_dt = _in_range("sample_dt", sample_dt, "s", dt, math.inf,
-                          f">= the time step dt = {dt:.6g} s", low_open=False)
+    # The band must hold the line the method reads: the LTH, or the mill turn without lifters.
+    lifters = scene.drum.lifters
+    line_hz, line = ((lifters.count * scene.rotation_hz, "the LTH") if lifters is not None
+                     else (scene.rotation_hz, "the rotation frequency"))
+    sample_dt = _in_range("sample_dt", sample_dt, "s", dt, 0.5 / line_hz,
+                          f"in [dt = {dt:.6g}, {0.5 / line_hz:.6g}] s, so that the Nyquist "
+                          f"frequency is above {line} at {line_hz:.4g} Hz", low_open=False)
     nyquist = 0.5 / sample_dt
     band_is_nyquist = analysis_band_hz is None
     band = nyquist if analysis_band_hz is None else _in_range(
-        "analysis_band_hz", analysis_band_hz, "Hz", 0.0, nyquist,
-        f"in (0, {nyquist:.6g}] Hz, the Nyquist frequency of sample_dt = {sample_dt:g} s")
+        "analysis_band_hz", analysis_band_hz, "Hz", line_hz, nyquist,
+        f"in [{line_hz:.4g}, {nyquist:.6g}] Hz: from {line} to the Nyquist frequency of "
+        f"sample_dt = {sample_dt:g} s", low_open=False)
     if impact_speed is None:
         speed, basis = expected_impact_speed(scene)
     else:
