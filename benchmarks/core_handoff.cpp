@@ -3,8 +3,8 @@
 //
 // On a VM the host decides which physical cores carry the vCPUs. When the two share a
 // last-level cache a hand-off takes some 30 ns; when they do not it takes several times
-// that, and millscope's 2-thread runs slow down with it (README, "Threads on a busy
-// machine"), while work that stays on one core does not. compare_liggghts.sh prints this
+// that, and millscope's 2-thread runs slow down with it (docs/performance.md, "Threads on a
+// busy machine"), while work that stays on one core does not. compare_liggghts.sh prints this
 // figure before each of its millscope runs.
 //
 // build: g++ -O2 -pthread benchmarks/core_handoff.cpp -o core_handoff

@@ -228,7 +228,7 @@ def test_bad_input_names_the_parameter_and_the_cases() -> None:
 def test_cases_of_other_scales_or_sampling_are_not_taken_for_repeats() -> None:
     """The group key (particles x speed) does not see the scale or the sampling; "small" and
     "tiny" share the drum but not the materials (stiffness), and instant and mean sampling
-    differ in energy by up to an order of magnitude (DESIGN.md section 2)."""
+    differ in energy by up to an order of magnitude (docs/architecture.md, Sampling)."""
     tiny = case_results(levels=(1, 2))
     scene = ms.presets.pilot_mill(0.71, "ceramic", 2, scale="small")
     record = synthetic_record(2, content=content_for(scene))

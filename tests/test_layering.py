@@ -1,6 +1,6 @@
-"""The layering of DESIGN.md section 1, read from the sources: the analysis side (plots -> fit
--> spectral -> record) does not import the simulation side (campaign -> simulation -> scene),
-which would load scenes, presets and the engine's campaign machinery for a fill estimate.
+"""The layering of docs/architecture.md (Layers), read from the sources: the analysis side
+(plots -> fit -> spectral -> record) does not import the simulation side (campaign -> simulation
+-> scene), which would load scenes, presets and the engine's campaign machinery for a fill estimate.
 
 Only imports that run when a module is imported count: those at module level, outside
 ``if TYPE_CHECKING:``; imports inside functions are deliberate late binding.

@@ -270,7 +270,7 @@ def test_full_matrix_has_42_cases_in_order() -> None:
 
 
 def test_part_of_the_matrix() -> None:
-    # DESIGN.md section 5's example
+    # the example of docs/architecture.md, Public API
     cases = paper_cases(
         particles=["ceramic"], speed_fractions=[0.71], load_levels=[1, 2, 3, 4], scale="paper"
     )

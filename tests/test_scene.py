@@ -393,7 +393,8 @@ def test_critical_speed_ball_convention() -> None:
     assert s.omega == pytest.approx(0.71 * math.sqrt(2 * 9.81 / 0.855), rel=1e-12)
     assert s.omega == pytest.approx(3.401142, abs=5e-7)  # the LIGGGHTS yardstick's omega
     assert s.rotation_hz == pytest.approx(s.omega / (2 * math.pi))
-    # DESIGN.md section 2: this convention puts the LTH at 8.66 Hz (the paper reports 8.8)
+    # this convention puts the LTH at 8.66 Hz (the paper reports 8.8): docs/physics.md, Critical
+    # speed and the lifter harmonic
     assert 16 * s.rotation_hz == pytest.approx(8.66, abs=0.005)
 
 

@@ -1,4 +1,5 @@
-"""Spectra, peaks and spectral energy against scipy and analytic values (DESIGN.md section 4)."""
+"""Spectra, peaks and spectral energy against scipy and analytic values (docs/architecture.md,
+Spectra)."""
 
 from __future__ import annotations
 
@@ -73,7 +74,7 @@ def test_on_bin_sinusoid_amplitude_exact() -> None:
 
 
 def test_energy_after_removing_mean_and_line_matches_white_noise_level() -> None:
-    """E = s^2 TR x (fraction kept) for white noise of variance s^2 (DESIGN.md section 4).
+    """E = s^2 TR x (fraction kept) for white noise of variance s^2 (docs/architecture.md, Spectra).
 
     The estimate's relative standard deviation for a Hann window is about 2/sqrt(N), so the
     block is 2^17 samples long (0.5 %), making the 3 % tolerance a 5-sigma bound.

@@ -1,7 +1,7 @@
 """The stiffness advisor (millscope.stiffness) against values computed here by hand: the Rayleigh
 time, the Hertz contact time t_c = 2.87 (m*^2 / (R* E*^2 v))^(1/5) with E*, R*, m* from the
-materials (DESIGN.md section 2), the Davis landing speed from the flight integrated here, the
-warning exactly at its threshold, and bad input."""
+materials (docs/physics.md, Pair constants), the Davis landing speed from the flight integrated
+here, the warning exactly at its threshold, and bad input."""
 
 from __future__ import annotations
 

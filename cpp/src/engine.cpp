@@ -102,7 +102,7 @@ void validate(const Config& c) {
   if (!(c.max_speed > 0.0)) invalid("max_speed", c.max_speed, "> 0 m/s (infinity: no bound)");
   if (!(c.max_overlap > 0.0 && c.max_overlap <= 1.0))
     invalid("max_overlap", c.max_overlap, "in (0, 1] (a fraction of the smaller radius)");
-  // The time step against the smallest Rayleigh time of the charge (DESIGN.md section 2).
+  // The time step against the smallest Rayleigh time of the charge (docs/physics.md, Time step).
   double t_min = HUGE_VAL;
   for (std::size_t i = 0; i < c.radius.size(); ++i) {
     const auto& mat = c.materials[static_cast<std::size_t>(c.material[i])];

@@ -1,6 +1,6 @@
 """millscope: DEM simulation of tumbling ball mills and filling-level estimation from torque.
 
-The public API (DESIGN.md section 5) is re-exported here; submodules hold the details.
+The public API (docs/architecture.md, Public API) is re-exported here; submodules hold the details.
 """
 
 from importlib import import_module as _import_module

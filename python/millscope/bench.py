@@ -3,7 +3,7 @@
 For each scene: particle-steps per second, ns per particle-step and bytes per particle, on each
 thread count asked for (1 and 2 by default); then the speed-up of the most threads over the
 fewest, and what leaving out the lifters, the friction or the one-material kernel saves
-(DESIGN.md section 7: a scene pays only for what it uses). The ``slice`` scene checks that the
+(docs/architecture.md, What a scene pays for). The ``slice`` scene checks that the
 cost stays linear in the particle count: periodic axial slices of the balls-only mill with
 10 000, 50 000 and 200 000 balls (or ``--slice-sizes``) should keep ns per particle-step within
 20 % of each other.

@@ -1,7 +1,8 @@
 """Bootstrap helpers: resampled means with the small-sample variance correction, pooled
 residuals, and percentile intervals.
 
-Energies of DEM torque scatter from block to block and from seed to seed (DESIGN.md section 4),
+Energies of DEM torque scatter from block to block and from seed to seed (docs/architecture.md,
+Spectra),
 so every energy of a campaign comes with a bootstrap spread. The plain bootstrap of a mean of n
 values has a variance (n - 1)/n times the usual unbiased estimate s^2/n, which matters for the
 few values a campaign affords (half the variance with 2), so deviations are scaled by

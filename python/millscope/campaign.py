@@ -27,7 +27,7 @@ and end when the campaign process ends, even when it is killed. A rerun skips fi
 and retries failed ones; a case that raises is recorded as failed and the others go on. Ctrl-C
 stops the campaign, keeping what has finished.
 
-Typical use (DESIGN.md section 5)::
+Typical use (docs/architecture.md, Public API)::
 
     scenes = ms.presets.paper_cases(particles=["ceramic"], speed_fractions=[0.71],
                                     load_levels=[1, 2, 3, 4], scale="paper")

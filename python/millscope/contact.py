@@ -1,7 +1,7 @@
 """The contact law on its own: pair constants, time-step criteria and single impacts.
 
 The DEM engine's contact law is Hertz-Mindlin no-slip with damping (paper section 3.1,
-eqs. 1-8; DESIGN.md section 2), implemented in C++ (``cpp/include/millscope/contact.hpp``).
+eqs. 1-8; docs/physics.md, The law), implemented in C++ (``cpp/include/millscope/contact.hpp``).
 This module exposes it for checks and advice:
 
 - :func:`pair_properties`: E*, G*, R*, m*, beta of a pair of bodies;
@@ -54,7 +54,7 @@ __all__ = [
     "verlet_stability_bound",
 ]
 
-#: Default time step as a fraction of the smallest Rayleigh time (DESIGN.md section 2).
+#: Default time step as a fraction of the smallest Rayleigh time (docs/physics.md, Time step).
 DEFAULT_DT_FRACTION: float = float(_core.DEFAULT_DT_FRACTION)
 #: Largest time step the engine accepts, as a fraction of the smallest Rayleigh time (its cap;
 #: a scene's contacts may set a lower limit, :func:`millscope.stiffness.time_step_limit`).
@@ -192,7 +192,7 @@ def _bodies(material_a: MaterialLike, material_b: MaterialLike | None, diameter_
 
 @dataclass(frozen=True)
 class PairProperties:
-    """Equivalent quantities of a contact (DESIGN.md section 2).
+    """Equivalent quantities of a contact (docs/physics.md, Pair constants).
 
     Attributes
     ----------

@@ -448,7 +448,7 @@ SYNTHETIC_BLOCK_S = (4.0, 14.0)
 def pilot_mill_rotation_hz(speed_fraction: float = 0.71, drum_diameter_m: float = 0.880,
                            ball_diameter_m: float = 0.025, gravity_m_s2: float = 9.81) -> float:
     """Rotation frequency of the pilot mill, Hz: speed_fraction x omega_c / 2 pi with
-    omega_c = sqrt(2 g / (D - d)) (DESIGN.md section 2)."""
+    omega_c = sqrt(2 g / (D - d)) (docs/physics.md, Critical speed and the lifter harmonic)."""
     omega_c = np.sqrt(2 * gravity_m_s2 / (drum_diameter_m - ball_diameter_m))
     return float(speed_fraction * omega_c / (2 * np.pi))
 

@@ -6,7 +6,7 @@ units of 40 %) with y = a ln(x) + b (Table 6; :mod:`millscope.logfit`, re-export
 analysis settings, so that a new record analysed the same way gives a filling estimate
 x = exp((y - b) / a) (:func:`estimate_fill`). :meth:`Calibration.from_results` makes one from a
 campaign's results (:func:`millscope.campaign_analysis.analyze_campaign`, imported when
-called: this module stays below the campaign in the layering, DESIGN.md section 1).
+called: this module stays below the campaign in the layering, docs/architecture.md, Layers).
 
 A fit through 2 load levels is exact (R^2 = 1 trivially) and leaves no residual to estimate
 the scatter from, so its estimates can have no interval. Such calibrations are allowed (the

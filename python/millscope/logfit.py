@@ -173,7 +173,7 @@ def log_fit(x: ArrayLike, y: ArrayLike) -> LogFit:
 
 
 def per_unit(energies: ArrayLike) -> NDArray[np.float64]:
-    """Energies divided by the largest of the group (DESIGN.md section 4).
+    """Energies divided by the largest of the group (docs/architecture.md, Spectra).
 
     A 2-D array is taken row by row (each row a group, e.g. a bootstrap replicate).
     """

@@ -9,7 +9,7 @@ panels of a larger figure, as in Fig. 10 a-g) and return the figure that holds i
 labels are set only when the function made the figure or when they are passed explicitly.
 
 Units: time in s, frequency in Hz, torque and spectral amplitude in N m; energies are shown per
-unit of the group's largest energy (DESIGN.md section 4).
+unit of the group's largest energy (docs/architecture.md, Spectra).
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from .fit import LogFit
 from .record import TorqueRecord
 from .spectral import Spectrum
 
-if TYPE_CHECKING:  # the figures stay below the simulation side (DESIGN.md section 1)
+if TYPE_CHECKING:  # the figures stay below the simulation side (docs/architecture.md, Layers)
     from .studies import StudyResult
 
 __all__ = ["plot_torque", "plot_spectrum", "plot_filtered", "plot_waterfall",

@@ -1,4 +1,4 @@
-"""The paper's pilot mill and its case matrix (paper Tables 1-5; DESIGN.md section 3).
+"""The paper's pilot mill and its case matrix (paper Tables 1-5; docs/physics.md).
 
 :func:`pilot_mill` builds one case, :func:`paper_cases` the Table 4 x Table 5 matrix or part
 of it, :func:`axial_slice` a periodic slice of the balls-only mill with a given ball count (for

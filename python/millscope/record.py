@@ -2,8 +2,8 @@
 
 A :class:`TorqueRecord` is where simulated and measured torque meet. It holds the sample times
 ``time_s`` (s) and the drive torque ``torque_Nm`` (N m, positive when the charge resists the
-rotation, DESIGN.md section 2), plus a JSON-serialisable ``meta`` dict (scene, dt, seed, rotation
-frequency, lifter count, sampling mode ... whatever produced it).
+rotation, docs/architecture.md, Torque), plus a JSON-serialisable ``meta`` dict (scene, dt,
+seed, rotation frequency, lifter count, sampling mode ... whatever produced it).
 
 Files:
 

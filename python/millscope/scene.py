@@ -1,4 +1,4 @@
-"""Scene: what is in the mill. Validated, immutable descriptions (DESIGN.md sections 2, 3, 6).
+"""Scene: what is in the mill. Validated, immutable descriptions (docs/physics.md).
 
 A :class:`Scene` is a drum (:class:`Drum`, with optional :class:`Lifters`), a charge (one
 :class:`Fraction` per size class), the materials (:class:`Material`) and one :class:`Pair`
@@ -472,7 +472,7 @@ class Scene:
         Rotation frequency, Hz, in [0, 3 x the critical speed] (0: the drum at rest). Exactly
         one of ``speed_fraction`` and ``speed_hz`` is given.
     critical_speed_convention : {"ball", "drum"}
-        omega_c = sqrt(2 g / (D - d_max)) ("ball", DESIGN.md section 2) or sqrt(2 g / D)
+        omega_c = sqrt(2 g / (D - d_max)) ("ball", docs/physics.md) or sqrt(2 g / D)
         ("drum"), d_max the largest sphere diameter.
     gravity : float
         g, m/s^2, in (0, 1000], acting along -y.

@@ -2,8 +2,8 @@
 
 A :class:`Simulation` runs one :class:`~millscope.scene.Scene` on the C++ engine
 (``cpp/include/millscope/engine.hpp``): Hertz-Mindlin no-slip contacts with damping (paper
-section 3.1, eqs. 1-8), velocity Verlet, gravity along -y, drum axis along +z (DESIGN.md
-section 2).
+section 3.1, eqs. 1-8), velocity Verlet, gravity along -y, drum axis along +z
+(docs/architecture.md, Units and axes).
 
 Life of a simulation::
 
@@ -61,7 +61,7 @@ CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"
 _FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
 _FILL_JITTER = 0.02  # random offset of a site, in diameters, each axis
 _WALL_GAP = 0.05  # clearance of a placed particle from the drum, in its diameters
-#: Guards (DESIGN.md section 6): a run stops with a message naming the step, the particle and
+#: Guards (docs/physics.md, Guards): a run stops with a message naming the step, the particle and
 #: its values when a particle moves faster than SPEED_BOUND_FACTOR x the fastest impact of the
 #: scene (:func:`millscope.stiffness.upper_impact_speed`, omega R + sqrt(2 g D): a particle
 #: leaves the shell at most at its speed and falls at most the diameter; collisions share
@@ -355,9 +355,9 @@ class Simulation:
         Returns
         -------
         TorqueRecord
-            ``time_s`` from the start of rotation, ``torque_Nm`` the drive torque (DESIGN.md
-            sign: positive when the charge resists rotation); ``meta`` holds the scene, dt,
-            seed, rotation frequency, lifter count and sampling mode. The parts (shell,
+            ``time_s`` from the start of rotation, ``torque_Nm`` the drive torque (positive
+            when the charge resists rotation; docs/architecture.md, Torque); ``meta`` holds the
+            scene, dt, seed, rotation frequency, lifter count and sampling mode. The parts (shell,
             lifters, end walls) are in :attr:`last_parts`. Interrupted with Ctrl-C, the record
             holds what was sampled and ``meta["interrupted"]`` is true.
         """

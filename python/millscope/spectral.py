@@ -1,4 +1,4 @@
-"""Spectral analysis of torque blocks (paper sections 3.2, 6.2-6.4; DESIGN.md section 4).
+"""Spectral analysis of torque blocks (paper sections 3.2, 6.2-6.4; docs/architecture.md, Spectra).
 
 Thin, typed wrappers over the C++ DSP core (FFTW): spectra, the lifter torque harmonic (LTH),
 band removal and the spectral energy of eq. (11).
@@ -376,7 +376,7 @@ def spectral_energy(data: Samples, remove: Sequence[RemoveItem] = ("mean",), *,
     """Energy of the block after removing the mean and spectral lines (eq. 11).
 
     Evaluated by Parseval on the windowed spectrum with the window's power corrected
-    (DESIGN.md section 4): E = dt sum_{kept k} |X_k|^2 / sum(w^2), over two-sided bins.
+    (docs/architecture.md, Spectra): E = dt sum_{kept k} |X_k|^2 / sum(w^2), over two-sided bins.
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """The contact law (paper eqs. 1-8) against analytic results, through single impacts.
 
 Materials, restitution and friction: paper Tables 2 and 3; steel balls 25 mm, ceramic particles
-12 mm (DESIGN.md section 3); the mill (walls) is steel.
+12 mm (docs/physics.md, The paper's pilot mill); the mill (walls) is steel.
 """
 
 from __future__ import annotations

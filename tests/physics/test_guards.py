@@ -1,4 +1,4 @@
-"""The engine's guards (DESIGN.md section 6): each builds the bad state on purpose and checks
+"""The engine's guards (docs/physics.md, Guards): each builds the bad state on purpose and checks
 that the run stops at once with a message naming the step, the particle, its values and a hint.
 
 Guards: a particle outside the drum, a non-finite value, a speed above the scene's bound, a

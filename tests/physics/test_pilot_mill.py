@@ -4,7 +4,7 @@ n_lifters x f_rot, and the drive's power equals the dissipation (power balance).
 shared by the tests of this module (about 35 s on 2 cores).
 
 Interval-mean sampling: instantaneous 10 ms samples alias the impact noise into 0-50 Hz and,
-in short blocks, bury the lifter harmonic (DESIGN.md section 2)."""
+in short blocks, bury the lifter harmonic (docs/architecture.md, Sampling)."""
 
 from __future__ import annotations
 
@@ -63,8 +63,8 @@ def test_drive_power_equals_dissipation(mill_run) -> None:  # type: ignore[no-un
 
 
 def test_mean_torque_is_positive_and_scales_to_the_paper_mill(mill_run) -> None:  # type: ignore[no-untyped-def]
-    """The charge resists rotation (positive torque, DESIGN.md sign), near the 265 N m of the
-    balls-only pilot mill at 71 % (DESIGN.md section 2); 10 % for the softer material and a
+    """The charge resists rotation (positive torque), near the 265 N m of the balls-only pilot
+    mill at 71 % (docs/architecture.md, Torque); 10 % for the softer material and a
     4 s mean."""
     _, _, rec, _, _ = mill_run
     assert rec.mean_torque_Nm == pytest.approx(265.0, rel=0.10)

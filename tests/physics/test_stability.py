@@ -1,4 +1,4 @@
-"""Stability suite: the engine on stiff and extreme cases (DESIGN.md sections 2 and 6).
+"""Stability suite: the engine on stiff and extreme cases (docs/accuracy.md, Stability).
 
 Every case runs a scene through :class:`~millscope.Simulation` on one thread: fill, settle for a
 fixed time, then the drum turns (record time 0 is the start of rotation). Cases: the paper's

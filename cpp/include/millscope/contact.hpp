@@ -1,5 +1,5 @@
-// Hertz-Mindlin no-slip contact with damping (paper section 3.1, eqs. 1-8; DESIGN.md sections 2
-// and 7). Pure, inline functions of (overlap, relative velocity, history); no allocation, no
+// Hertz-Mindlin no-slip contact with damping (paper section 3.1, eqs. 1-8; docs/physics.md, The
+// law). Pure, inline functions of (overlap, relative velocity, history); no allocation, no
 // virtual calls. The engine's hot loop calls these once per touching pair per step.
 //
 // ---------------------------------------------------------------------------------------------
@@ -31,7 +31,7 @@
 // back.
 //
 // ---------------------------------------------------------------------------------------------
-// Structure (DESIGN.md section 7)
+// Structure (docs/architecture.md, What a scene pays for)
 // ---------------------------------------------------------------------------------------------
 // ContactLaw<Normal, Damping, Tangential, Rolling, Clamp>: each part is stateless, reads its
 // parameters from materials::PairConstants (one struct per pair of materials) and declares its
@@ -145,7 +145,8 @@ struct TangentialResult {
 /// Each step the stored d_t is first turned into the current tangent plane (its normal component
 /// projected out, its length kept), then advanced by v_t dt. When the trial force
 /// F_te + F_td exceeds mu |F_n|, F_t is scaled down to mu |F_n| along the trial force and d_t is
-/// set to -F_t / S_t, so that the spring alone carries the Coulomb force (DESIGN.md section 2).
+/// set to -F_t / S_t, so that the spring alone carries the Coulomb force (docs/physics.md,
+/// The law).
 /// The bound uses |F_n|, as LIGGGHTS and LAMMPS do: in the tensile tail of a damped, unclamped
 /// contact friction still acts, so an impact that slides throughout gets a tangential impulse of
 /// mu sum |F_n| dt, which is 7 % (e = 0.5) to 21 % (e = 0.2) above mu times the net normal
@@ -233,7 +234,7 @@ struct NoFriction {
   static constexpr bool active = false;
 };
 
-/// No rolling resistance (the only rolling part so far; DESIGN.md section 2).
+/// No rolling resistance (the only rolling part; docs/physics.md, The law).
 struct NoRolling {
   static constexpr std::size_t history_size = 0;
   static constexpr bool active = false;

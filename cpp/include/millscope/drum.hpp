@@ -1,6 +1,7 @@
 // Drum geometry: cylindrical shell, flat end walls (or periodic ends) and lifters, rotating about
-// +z (DESIGN.md section 2). Pure geometry: where a sphere touches the drum, with what overlap and
-// normal, and how fast the drum's surface moves there. The contact law is applied elsewhere.
+// +z (docs/architecture.md, Units and axes). Pure geometry: where a sphere touches the drum,
+// with what overlap and normal, and how fast the drum's surface moves there. The contact law is
+// applied elsewhere.
 //
 // Frames: the drum axis is the z axis, the drum occupies 0 <= z <= L, and the drum has turned by
 // angle theta (rad) about +z. Lifter k is a straight prism along z whose cross-section lives in
@@ -268,7 +269,7 @@ inline WallContact lifter_contact(const Geometry& g, const LifterAngles& at, int
 /// no_lifter (-1), or 4 k + mask where k is the lower of the two lifters angularly nearest the
 /// sphere and mask bit 0 / bit 1 stand for lifter k / lifter k + 1 (mod n). The step kernels
 /// keep one per particle so that only spheres next to a lifter pay for the distance to it
-/// (DESIGN.md section 7).
+/// (docs/architecture.md, What a scene pays for).
 using LifterReach = std::int32_t;
 inline constexpr LifterReach no_lifter = -1;
 
@@ -292,9 +293,9 @@ inline LifterReach lifter_reach(const Geometry& g, const LifterAngles& at, const
 
 /// All contacts of a sphere (centre x, radius r) with the drum whose lifters are at `at`, for a
 /// drum whose shape is known when compiling: without lifters (Lifters false) or with periodic
-/// ends (EndWalls false) those parts cost nothing (DESIGN.md section 7). Only the lifters in
-/// `reach` are looked at. The step kernels call this; Lifters and EndWalls must match
-/// g.lifters > 0 and g.end_walls.
+/// ends (EndWalls false) those parts cost nothing (docs/architecture.md, What a scene pays
+/// for). Only the lifters in `reach` are looked at. The step kernels call this; Lifters and
+/// EndWalls must match g.lifters > 0 and g.end_walls.
 template <bool Lifters, bool EndWalls>
 inline WallContacts find_contacts_of(const Geometry& g, const LifterAngles& at, const Vec3& x,
                                      double r, LifterReach reach) {

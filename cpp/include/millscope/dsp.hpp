@@ -1,4 +1,5 @@
-// Spectral analysis of torque records (paper sections 3.2 and 6.2-6.4; DESIGN.md section 4).
+// Spectral analysis of torque records (paper sections 3.2 and 6.2-6.4; docs/architecture.md,
+// Spectra).
 //
 // Conventions: x is a block of N uniformly spaced real samples taken at fs hertz, so the block
 // length is TR = N / fs seconds and the resolution df = 1 / TR (eq. 9). Every spectrum is the FFT of

@@ -1,6 +1,6 @@
 // The DEM engine: state of the charge in structure-of-arrays storage, the step loop (velocity
-// Verlet), contact forces with the charge and the drum, and the drive torque (DESIGN.md
-// sections 2 and 7; paper section 3.1).
+// Verlet), contact forces with the charge and the drum, and the drive torque
+// (docs/architecture.md, The engine; docs/physics.md; paper section 3.1).
 //
 // One step, from t to t + dt (kick-drift-kick velocity Verlet, for translation and rotation):
 //   1. v += F/m dt/2, w += T/I dt/2          (half-step velocities v(t + dt/2))
@@ -117,7 +117,7 @@ struct Ledger {
   double spring_work = 0.0;    // energy the Mindlin springs gained without work (< 0: lost)
 };
 
-/// Which specialised step kernel a scene needs (DESIGN.md section 7).
+/// Which specialised step kernel a scene needs (docs/architecture.md, What a scene pays for).
 struct Variant {
   enum class Law : int { hertz_mindlin = 0, frictionless = 1, elastic = 2, clamped = 3 };
   Law law = Law::hertz_mindlin;

@@ -623,7 +623,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
       const contact::PairForce pf = contact::pair_force<Law, dissipates>(
           pc, wc.normal, wc.overlap, r[i], m[i], v_rel, r[i], 0.0, history_dt, hist);
       f += pf.force_i;
-      // Drive torque: ((x_c - axis) x F_drum_on_particle) . z (DESIGN.md section 2).
+      // Drive torque: ((x_c - axis) x F_drum_on_particle) . z (docs/architecture.md, Torque).
       const double arm_torque =
           wc.point.x() * pf.force_i.y() - wc.point.y() * pf.force_i.x();
       if (wc.part == drum::Part::shell) {

@@ -1,5 +1,5 @@
-// Materials and the constants of a pair of them (paper section 3.1 and Tables 2-3; DESIGN.md
-// section 2).
+// Materials and the constants of a pair of them (paper section 3.1 and Tables 2-3; docs/physics.md,
+// Pair constants).
 //
 // A pair of materials i, j has the equivalent quantities
 //   1/E* = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j,                 E = 2 G (1 + nu)

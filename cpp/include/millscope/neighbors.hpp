@@ -1,5 +1,5 @@
 // Neighbour search: a cell grid and a half Verlet list with a skin, with per-pair contact
-// history carried across rebuilds (DESIGN.md sections 1 and 7).
+// history carried across rebuilds (docs/architecture.md, The engine).
 //
 // The list holds every pair i < j whose surfaces are closer than the skin, in compressed rows:
 // the partners of i are partner[start[i] .. start[i+1]), sorted. Each listed pair owns

@@ -1,5 +1,5 @@
-// Time-step criteria (DESIGN.md section 2): Rayleigh time, Hertz contact time and overlap, and
-// the default and largest accepted time step.
+// Time-step criteria (docs/physics.md, Time step): Rayleigh time, Hertz contact time and
+// overlap, and the default and largest accepted time step.
 //
 // Why the Rayleigh time sets the limit, and why 0.5 T_R: velocity Verlet on a linear spring of
 // angular frequency w is stable for dt < 2/w. A Hertz contact stiffens as it loads; at its largest
@@ -69,7 +69,7 @@ inline double hertz_max_overlap(double m_star, double r_star, double e_star, dou
 
 /// Duration of an elastic head-on Hertz impact at approach speed v:
 /// t_c = 2.87 (m*^2 / (R* E*^2 v))^(1/5), s. (The exact factor is 2.8683 = 2.9432 (15/16)^(2/5);
-/// 2.87 is the rounded value DESIGN.md and the literature quote, 0.06 % higher.)
+/// 2.87 is the rounded value the literature quotes, 0.06 % higher.)
 inline double hertz_contact_time(double m_star, double r_star, double e_star, double speed) {
   detail::require_positive(m_star, "m_star", " kg");
   detail::require_positive(r_star, "r_star", " m");
