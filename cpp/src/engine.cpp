@@ -23,19 +23,16 @@ namespace millscope::engine {
 namespace {
 
 // What a thread's share of the work costs, for splitting the work among the threads in
-// contiguous blocks (Access::split_rows, Access::split_particles). Fitted to the cycles each
-// thread spent (rdtsc around each phase of the step loop) between list builds, 2 threads,
-// ceramic4 and balls (2026-11-25): the ratio of the two threads' times against the ratio of
-// their counts, over about 130 intervals between builds per scene.
+// contiguous blocks (Access::split_rows, Access::split_particles). The weights fit the time
+// each thread spends between list builds (2 threads, the paper-scale balls and ceramic4
+// scenes): the ratio of the two threads' times against the ratio of their weighted counts.
 // A listed pair that touches costs the pair pass about 6 times one that does not (its law in
-// lanes and its sums, besides the distance test): ceramic4's ratios fit best with 6 to 8,
-// within 1 %; the balls', whose halves touch alike, within 1-4 % for any weight from 1 to 8.
+// lanes and its sums, besides the distance test); ceramic4, whose blocks touch unevenly, fits
+// best with 6 to 8, and the balls, whose halves touch alike, fit any weight from 1 to 8.
 constexpr double touching_pair_cost = 6.0;  // in listed pairs that do not touch
 // A particle in contact with the drum costs the particle pass and the kick and drift about 3
-// times one that is not (its wall law and torque): ceramic4 fits best with 3. A later check
-// timed each chunk of 128 particles of the pass (1 thread, ceramic4 from its cached state, 3
-// stretches of 1000 steps): the cut this weight makes gives block 0 47.7-51.8 % of the true
-// cost; one by a particle's distance to the shell instead, 49.3-51.3 %. Not worth a change.
+// times one that is not (its wall law and torque). A finer model (by the distance to the shell)
+// moves the cut by about 1 % of the cost, too little to be worth its complexity.
 constexpr double drum_contact_cost = 3.0;  // in particles not in contact with it
 
 /// Boundaries 0 = split[0] <= split[1] <= ... <= split[team] = n cutting items 0..n-1 into team

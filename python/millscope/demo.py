@@ -9,7 +9,7 @@ section (:func:`main_job_section`): the torque, spectrum and filtered signal of 
 level, whether the energy falls monotonically with the filling, and a leave-one-out check.
 The defaults (:class:`DemoPlan`) are the LDMS case (ceramic-like particles, 71 % of critical)
 at load levels 1..4 at the ``"tiny"`` scale, 8 s of rotation each of which the block 2-8 s is
-analysed: 5 min 11 s on 2 free cores (README, "Two commands").
+analysed: about 5 minutes on 2 free cores (README, "Two commands").
 
 :func:`run_synthetic_demo` (``millscope demo --synthetic``) runs the same analysis in seconds on
 synthetic records whose energy law is known, so that the analysis can be seen to recover it.

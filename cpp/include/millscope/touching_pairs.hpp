@@ -50,13 +50,11 @@ struct TouchingPairs {
 /// list, which the hardware's prefetchers cannot follow. So at each 8 listed pairs the search
 /// asks for the state of the partners `pair_ahead` pairs on, and for the list `list_ahead`
 /// pairs on, so that the partners' indices are at hand when their turn comes. Asking does not
-/// change what is computed. Measured on the 200 000-ball slice, 1 thread, paired runs against
-/// the search without it: the list alone 0.997, the positions and radii alone 1.016, both
-/// 1.068 (3 pairs each), both with the velocities, spins and inverse masses too 1.078;
-/// pair_ahead 128, 256 and 512 with the positions 1.045, 1.051-1.097 and 1.046; list_ahead
-/// 1024 and 2048 alike.
-/// The arrays are a fixed count, so that the loop over them unrolls (1.021 against a count
-/// known only at run time, 4 pairs).
+/// change what is computed. Both are needed: the partners' state alone waits on list entries
+/// that are not in the cache yet, and the list alone does not bring the state. Every array the
+/// pair pass reads for a partner is asked for (positions, radii, velocities, spins, inverse
+/// masses).
+/// The arrays are a fixed count, so that the loop over them unrolls.
 struct PartnerPrefetch {
   static constexpr std::size_t count = 11;
   const double* arrays[count];  // per-particle arrays to ask for, at partner j's entry
