@@ -268,3 +268,14 @@ def test_cli_advise_bad_input_is_one_line_and_exit_2(argv: list[str], message: s
     assert cli.main(["advise", *argv]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(message) and "\n" not in err
+
+
+def test_a_drum_at_rest_is_advised_on_with_the_nyquist_band() -> None:
+    """No rotation, no LTH: sample_dt and the band have only their lower limits (the LTH range
+    of a turning drum divided by its zero frequency)."""
+    scene = LD_TINY.replace(speed_fraction=None, speed_hz=0.0)
+    advice = quiet_advice(scene, sample_dt=0.5)
+    assert advice.analysis_band_hz == pytest.approx(1.0)
+    with pytest.raises(ValueError, match=r"analysis_band_hz = 0\.0 Hz is not valid; it must be "
+                                         r"in \(0, 50\] Hz"):
+        advise_stiffness(scene, analysis_band_hz=0.0)

@@ -527,19 +527,27 @@ def advise_stiffness(scene: Scene, *, dt: float | None = None, sample_dt: float 
     t_rayleigh, stiffest = scene.min_rayleigh_time()
     limit = time_step_limit(scene)
     dt = limit.default_dt() if dt is None else limit.check(dt)
-    # The band must hold the line the method reads: the LTH, or the mill turn without lifters.
+    # The band must hold the line the method reads: the LTH, or the mill turn without lifters
+    # (none for a drum at rest, whose band only needs to be above 0 Hz).
     lifters = scene.drum.lifters
     line_hz, line = ((lifters.count * scene.rotation_hz, "the LTH") if lifters is not None
                      else (scene.rotation_hz, "the rotation frequency"))
-    sample_dt = _in_range("sample_dt", sample_dt, "s", dt, 0.5 / line_hz,
-                          f"in [dt = {dt:.6g}, {0.5 / line_hz:.6g}] s, so that the Nyquist "
-                          f"frequency is above {line} at {line_hz:.4g} Hz", low_open=False)
+    if line_hz > 0:
+        sample_dt = _in_range("sample_dt", sample_dt, "s", dt, 0.5 / line_hz,
+                              f"in [dt = {dt:.6g}, {0.5 / line_hz:.6g}] s, so that the Nyquist "
+                              f"frequency is above {line} at {line_hz:.4g} Hz", low_open=False)
+    else:
+        sample_dt = _in_range("sample_dt", sample_dt, "s", dt, math.inf,
+                              f">= the time step dt = {dt:.6g} s", low_open=False)
     nyquist = 0.5 / sample_dt
     band_is_nyquist = analysis_band_hz is None
+    band_valid = (f"in [{line_hz:.4g}, {nyquist:.6g}] Hz: from {line} to the Nyquist "
+                  f"frequency of sample_dt = {sample_dt:g} s" if line_hz > 0 else
+                  f"in (0, {nyquist:.6g}] Hz, the Nyquist frequency of sample_dt = "
+                  f"{sample_dt:g} s")
     band = nyquist if analysis_band_hz is None else _in_range(
-        "analysis_band_hz", analysis_band_hz, "Hz", line_hz, nyquist,
-        f"in [{line_hz:.4g}, {nyquist:.6g}] Hz: from {line} to the Nyquist frequency of "
-        f"sample_dt = {sample_dt:g} s", low_open=False)
+        "analysis_band_hz", analysis_band_hz, "Hz", line_hz, nyquist, band_valid,
+        low_open=line_hz <= 0)
     if impact_speed is None:
         speed, basis = expected_impact_speed(scene)
     else:
