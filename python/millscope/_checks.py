@@ -13,7 +13,11 @@ from collections.abc import Mapping
 from numbers import Integral, Real
 from typing import Any
 
-__all__ = ["as_float", "keys", "integer", "number", "show"]
+__all__ = ["MAX_LIFTERS", "as_float", "keys", "integer", "number", "show"]
+
+#: The most lifter bars a drum may have (a bar every 3 mm of the shell of a 10 m drum); here,
+#: below both the scene (model) and the spectra (signal), which check it.
+MAX_LIFTERS = 10_000
 
 
 def _is_number(value: object) -> bool:

@@ -64,15 +64,15 @@ from typing import Any
 
 import numpy as np
 
-from ._files import atomic_write
-from .analysis import WINDOWS, AnalysisSettings
-from .campaign import MAX_DURATION_S, Campaign, Case, CaseResult, RunSettings
-from .contact import MAX_DT_FRACTION
-from .logfit import log_fit, per_unit
-from .presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
-from .record import TorqueRecord
-from .scene import Scene, _between, _choice, _fail, _positive, _real
-from .spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
+from .._files import atomic_write
+from ..signal.analysis import WINDOWS, AnalysisSettings
+from .runs import MAX_DURATION_S, Campaign, Case, CaseResult, RunSettings
+from ..model.contact import MAX_DT_FRACTION
+from ..calibration.logfit import log_fit, per_unit
+from ..model.presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
+from ..signal.record import TorqueRecord
+from ..model.scene import Scene, _between, _choice, _fail, _positive, _real
+from ..signal.spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
 
 __all__ = [
     "KNOBS",
@@ -1040,26 +1040,6 @@ class StudyResult:
             f"of wall time against the {names[pareto_quantity]} error.",
         ]
         return "\n".join(notes) + "\n"
-
-    def write(self, folder: str | os.PathLike[str], stem: str = "accuracy", *,
-              quantity: str = "energy") -> list[Path]:
-        """Writes ``<stem>.csv``, ``<stem>.md`` and ``<stem>.png`` (error against wall time,
-        :func:`millscope.plots.plot_accuracy`) into ``folder``, each atomically.
-
-        Returns
-        -------
-        list of Path
-        """
-        from . import plots
-
-        out = Path(folder)
-        out.mkdir(parents=True, exist_ok=True)
-        csv_path, md_path = out / f"{stem}.csv", out / f"{stem}.md"
-        self.to_csv(csv_path)
-        with atomic_write(md_path, "w") as fh:
-            fh.write(self.to_markdown(quantity))
-        png = plots.save_figure(plots.plot_accuracy(self, quantity), out / f"{stem}.png")
-        return [csv_path, md_path, png]
 
 
 def _plain(value: float) -> str:

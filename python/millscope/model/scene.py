@@ -31,10 +31,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._checks import as_float, show
-from ._files import MAX_JSON_BYTES, read_json
+from .._checks import MAX_LIFTERS, as_float, show
+from .._files import MAX_JSON_BYTES, read_json
 from .contact import MIN_RESTITUTION, rayleigh_time
-from .spectral import MAX_LIFTERS
 
 __all__ = [
     "CRITICAL_SPEED_CONVENTIONS",

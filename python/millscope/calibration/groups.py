@@ -7,9 +7,10 @@ LTH frequency and amplitude (Figs. 10-11), energy per unit (Fig. 14) and its log
 :func:`table6_markdown` writes the Table 6 analogue.
 
 Each case's block was analysed by the campaign (:func:`~millscope.analysis.analyze_block`);
-this module builds on :class:`~millscope.campaign.CaseResult` and the presets' case keys, so it
-sits above the campaign in the layering. :mod:`millscope.report` and
-:meth:`millscope.Calibration.from_results` use it.
+this module reads the attributes of :class:`~millscope.campaign.CaseResult` (``status``,
+``analysis``, ``record``, ``scene``, ``key``, ...) without importing the campaign, so that it
+sits below the campaign in the layering, where :meth:`millscope.Calibration.from_results` and
+:mod:`millscope.report` use it.
 
 Units: s, Hz, N m, (N m)^2 s; per-unit values are dimensionless.
 """
@@ -20,16 +21,17 @@ import math
 import zlib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .analysis import MIN_SUB_BLOCKS, AnalysisSettings, sub_block_energies
+from ..signal.analysis import MIN_SUB_BLOCKS, AnalysisSettings, sub_block_energies
 from .bootstrap import log_residuals, mean_factors, percentile_interval, pooled_mean_factors
-from .campaign import CaseResult
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
-from .presets import case_key
+
+if TYPE_CHECKING:  # for annotations only: the campaign sits above this layer
+    from ..campaign.runs import CaseResult
 
 __all__ = ["GroupAnalysis", "analyze_campaign", "table6_markdown"]
 
@@ -222,7 +224,7 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
         if r.analysis is None or not math.isfinite(r.energy):
             raise ValueError(f"case {r.case.name} ({r.hash[:12]}) was not analysed over a block; "
                              "give the Campaign a block=(t1, t2)")
-        key = case_key(r.scene)
+        key = r.key
         if key.load_level is None or key.particles is None:
             continue
         speed = key.speed_fraction if key.speed_fraction is not None else key.rotation_hz

@@ -70,9 +70,9 @@ import numpy as np
 import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
-from . import _checks
-from ._files import MAX_JSON_BYTES, atomic_write, read_json
-from ._samples import check_samples
+from .. import _checks
+from .._files import MAX_JSON_BYTES, atomic_write, read_json
+from .._samples import check_samples
 from .record import TorqueRecord
 from .spectral import MAX_LIFTERS
 

@@ -64,15 +64,15 @@ from typing import Any, Literal
 
 import numpy as np
 
-from . import _core
-from ._files import atomic_write, read_json
-from .analysis import AnalysisSettings, analyze_block
-from .presets import paper_cases
-from .record import RecordError, TorqueRecord
-from .scene import Scene, _between, _choice, _fail, _positive, _real
-from .simulation import Simulation, _available_cores
-from .spectral import spectral_energy
-from .stiffness import time_step_limit
+from .. import _core
+from .._files import atomic_write, read_json
+from ..signal.analysis import AnalysisSettings, analyze_block
+from ..model.presets import CaseKey, case_key, paper_cases
+from ..signal.record import RecordError, TorqueRecord
+from ..model.scene import Scene, _between, _choice, _fail, _positive, _real
+from ..engine.simulation import Simulation, _available_cores
+from ..signal.spectral import spectral_energy
+from ..model.stiffness import time_step_limit
 
 __all__ = [
     "CASE_FORMAT",
@@ -439,6 +439,12 @@ class CaseResult:
     @property
     def scene(self) -> Scene:
         return self.case.scene
+
+    @property
+    def key(self) -> CaseKey:
+        """The case's particles, speed, load level and group (:func:`~millscope.presets.case_key`
+        of its scene), by which :func:`~millscope.analyze_campaign` groups the results."""
+        return case_key(self.scene)
 
     @property
     def ok(self) -> bool:

@@ -26,7 +26,7 @@ import math
 import warnings
 from dataclasses import dataclass
 
-from .drivetrain import DriveTrain, decimate_record
+from ..signal.drivetrain import DriveTrain, decimate_record
 from .fit import (
     Calibration,
     NoIntervalWarning,
@@ -34,7 +34,7 @@ from .fit import (
     estimate_fill,
     no_interval_reason,
 )
-from .record import TorqueRecord
+from ..signal.record import TorqueRecord
 
 __all__ = ["MissingBandWarning", "MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
 
