@@ -17,6 +17,7 @@ excuse an import that runs up a layer.
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -50,6 +51,7 @@ def _module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
+@functools.cache
 def _all_modules() -> dict[str, Path]:
     """Every module of the sources; the extension by its stub, which imports no module."""
     return {_module_name(p): p for p in sorted([*PACKAGE.rglob("*.py"), PACKAGE / "_core.pyi"])}
@@ -108,6 +110,7 @@ def _top_level(tree: ast.Module) -> set[int]:
     return ran
 
 
+@functools.cache
 def imports(module: str, *, at_import_time: bool = False) -> set[str]:
     """The modules of the package that ``module`` imports: anywhere in its source, or only
     those imports that run when it is imported."""

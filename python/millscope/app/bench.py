@@ -35,9 +35,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import TextIO
 
-from ..model import presets
 from .._core import build_info
-from ..model.scene import Scene
 from ..engine.simulation import (
     CHECKPOINT_FORMAT,
     Simulation,
@@ -45,6 +43,8 @@ from ..engine.simulation import (
     check_threads,
     threads_range,
 )
+from ..model import presets
+from ..model.scene import Scene
 from ..model.stiffness import time_step_limit
 
 __all__ = [

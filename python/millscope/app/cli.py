@@ -136,9 +136,9 @@ def _confidence(text: str) -> float:
 
 def cmd_monitor(args: argparse.Namespace) -> int:
     """A filling estimate per window of a long torque record."""
-    from ..signal.drivetrain import DriveTrain
     from ..calibration.fit import Calibration
     from ..calibration.monitoring import monitor_record
+    from ..signal.drivetrain import DriveTrain
     from ..signal.record import TorqueRecord
 
     calibration = Calibration.load(args.calibration)

@@ -31,10 +31,7 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from ..report import plots
 from .._files import atomic_write
-from ..signal.analysis import analyze_block
-from ..campaign.runs import MAX_DURATION_S, Campaign, CaseResult, RunSettings
 from ..calibration.fit import (
     MIN_LEVELS_FOR_INTERVALS,
     Calibration,
@@ -45,10 +42,20 @@ from ..calibration.fit import (
     log_fit,
     per_unit,
 )
-from ..model.presets import LIFTER_COUNT, LOAD_LEVELS, PARTICLE_KINDS, SCALES, paper_cases, pilot_mill
-from ..signal.record import TorqueRecord
-from ..report.reports import calibration_file_name, write_report
+from ..campaign.runs import MAX_DURATION_S, Campaign, CaseResult, RunSettings
 from ..engine.simulation import _available_cores
+from ..model.presets import (
+    LIFTER_COUNT,
+    LOAD_LEVELS,
+    PARTICLE_KINDS,
+    SCALES,
+    paper_cases,
+    pilot_mill,
+)
+from ..report import plots
+from ..report.reports import calibration_file_name, write_report
+from ..signal.analysis import analyze_block
+from ..signal.record import TorqueRecord
 from ..signal.spectral import LTH_CLEAR_BINS, band_stop, lifter_harmonic_hz, spectrum
 from ..signal.synthetic import PAPER_HDMS_LAW, SyntheticTorque, synthetic_record
 

@@ -66,13 +66,13 @@ import numpy as np
 
 from .. import _core
 from .._files import atomic_write, read_json
-from ..signal.analysis import AnalysisSettings, analyze_block
-from ..model.presets import CaseKey, case_key, paper_cases
-from ..signal.record import RecordError, TorqueRecord
-from ..model.scene import Scene, _between, _choice, _fail, _positive, _real
 from ..engine.simulation import Simulation, _available_cores
-from ..signal.spectral import spectral_energy
+from ..model.presets import CaseKey, case_key, paper_cases
+from ..model.scene import Scene, _between, _choice, _fail, _positive, _real
 from ..model.stiffness import time_step_limit
+from ..signal.analysis import AnalysisSettings, analyze_block
+from ..signal.record import RecordError, TorqueRecord
+from ..signal.spectral import spectral_energy
 
 __all__ = [
     "CASE_FORMAT",

@@ -65,14 +65,14 @@ from typing import Any
 import numpy as np
 
 from .._files import atomic_write
-from ..signal.analysis import WINDOWS, AnalysisSettings
-from .runs import MAX_DURATION_S, Campaign, Case, CaseResult, RunSettings
-from ..model.contact import MAX_DT_FRACTION
 from ..calibration.logfit import log_fit, per_unit
+from ..model.contact import MAX_DT_FRACTION
 from ..model.presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
-from ..signal.record import TorqueRecord
 from ..model.scene import Scene, _between, _choice, _fail, _positive, _real
+from ..signal.analysis import WINDOWS, AnalysisSettings
+from ..signal.record import TorqueRecord
 from ..signal.spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
+from .runs import MAX_DURATION_S, Campaign, Case, CaseResult, RunSettings
 
 __all__ = [
     "KNOBS",

@@ -32,14 +32,14 @@ from matplotlib.figure import Figure
 from tqdm.auto import tqdm
 
 from .. import _core
-from . import plots
 from .._files import atomic_write
-from ..campaign.studies import StudyResult
-from ..campaign.runs import Campaign, CaseResult, UnreadableCase, _listing, unreadable_cases
-from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
 from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
+from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
+from ..campaign.runs import Campaign, CaseResult, UnreadableCase, _listing, unreadable_cases
+from ..campaign.studies import StudyResult
 from ..model.presets import case_key
 from ..signal.spectral import PEAK_DISTINCT_RATIO, spectrum
+from . import plots
 
 __all__ = ["UnreadableCasesError", "calibration_file_name", "write_report", "write_study"]
 
