@@ -64,11 +64,11 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .. import _core
+from .. import _checks, _core
 from .._files import atomic_write, read_json
 from ..engine.simulation import Simulation, _available_cores
 from ..model.presets import CaseKey, case_key, paper_cases
-from ..model.scene import Scene, _between, _choice, _fail, _positive, _real
+from ..model.scene import Scene
 from ..model.stiffness import time_step_limit
 from ..signal.analysis import AnalysisSettings, analyze_block
 from ..signal.record import RecordError, TorqueRecord
@@ -108,7 +108,7 @@ Status = Literal["done", "failed", "pending"]
 
 def _integer(where: str, value: object, lowest: int) -> int:
     if not isinstance(value, Integral) or isinstance(value, (bool, np.bool_)) or value < lowest:
-        raise _fail(where, value, f"an integer >= {lowest}")
+        raise _checks.fail(where, value, f"an integer >= {lowest}")
     return int(value)
 
 
@@ -162,35 +162,37 @@ class RunSettings:
     def __post_init__(self) -> None:
         values: dict[str, Any] = {
             "seed": _integer("RunSettings.seed", self.seed, 0),
-            "duration_s": _between("RunSettings.duration_s", self.duration_s, 0.0,
-                                   MAX_DURATION_S, "s", low_open=True,
-                                   why="the longest rotation a case simulates"),
-            "sample_dt": _positive("RunSettings.sample_dt", self.sample_dt, "s"),
-            "sampling": _choice("RunSettings.sampling", self.sampling, SAMPLINGS),
+            "duration_s": _checks.between("RunSettings.duration_s", self.duration_s, 0.0,
+                                          MAX_DURATION_S, "s", low_open=True,
+                                          why="the longest rotation a case simulates"),
+            "sample_dt": _checks.positive("RunSettings.sample_dt", self.sample_dt, "s"),
+            "sampling": _checks.choice("RunSettings.sampling", self.sampling, SAMPLINGS),
             "threads": _integer("RunSettings.threads", self.threads, 1),
-            "dt": None if self.dt is None else _positive("RunSettings.dt", self.dt, "s"),
-            "settle_tolerance": _positive("RunSettings.settle_tolerance", self.settle_tolerance),
-            "settle_min_s": _positive("RunSettings.settle_min_s", self.settle_min_s, "s"),
-            "settle_max_s": _positive("RunSettings.settle_max_s", self.settle_max_s, "s"),
+            "dt": None if self.dt is None else _checks.positive("RunSettings.dt", self.dt, "s"),
+            "settle_tolerance": _checks.positive("RunSettings.settle_tolerance",
+                                                 self.settle_tolerance),
+            "settle_min_s": _checks.positive("RunSettings.settle_min_s", self.settle_min_s, "s"),
+            "settle_max_s": _checks.positive("RunSettings.settle_max_s", self.settle_max_s, "s"),
         }
-        warm = _real("RunSettings.warm_up_s", self.warm_up_s, "s", ">= 0")
+        warm = _checks.real("RunSettings.warm_up_s", self.warm_up_s, "s", ">= 0")
         if not 0.0 <= warm < values["duration_s"]:
-            raise _fail("RunSettings.warm_up_s", self.warm_up_s,
-                        f"in [0, duration_s = {values['duration_s']:g}) s", "s")
+            raise _checks.fail("RunSettings.warm_up_s", self.warm_up_s,
+                               f"in [0, duration_s = {values['duration_s']:g}) s", "s")
         values["warm_up_s"] = warm
         if values["settle_max_s"] < values["settle_min_s"]:
-            raise _fail("RunSettings.settle_max_s", self.settle_max_s,
-                        f">= settle_min_s = {values['settle_min_s']:g} s", "s")
+            raise _checks.fail("RunSettings.settle_max_s", self.settle_max_s,
+                               f">= settle_min_s = {values['settle_min_s']:g} s", "s")
         for name, value in values.items():
             object.__setattr__(self, name, value)
         if self.total_samples < 2:
-            raise _fail("RunSettings.duration_s", self.duration_s,
-                        f"at least 2 samples of sample_dt = {self.sample_dt:g} s", "s")
+            raise _checks.fail("RunSettings.duration_s", self.duration_s,
+                               f"at least 2 samples of sample_dt = {self.sample_dt:g} s", "s")
         if self.total_samples - self.warm_up_samples < 2:
-            raise _fail("RunSettings.warm_up_s", self.warm_up_s,
-                        f"at most duration_s - 2 x sample_dt = "
-                        f"{self.duration_s - 2 * self.sample_dt:g} s, so that 2 samples remain",
-                        "s")
+            raise _checks.fail(
+                "RunSettings.warm_up_s", self.warm_up_s,
+                f"at most duration_s - 2 x sample_dt = "
+                f"{self.duration_s - 2 * self.sample_dt:g} s, so that 2 samples remain",
+                "s")
 
     @property
     def total_samples(self) -> int:
@@ -228,19 +230,20 @@ class Case:
 
     def __post_init__(self) -> None:
         if not isinstance(self.scene, Scene):
-            raise _fail("Case.scene", self.scene, "a millscope Scene")
+            raise _checks.fail("Case.scene", self.scene, "a millscope Scene")
         if not isinstance(self.settings, RunSettings):
-            raise _fail("Case.settings", self.settings, "a RunSettings")
+            raise _checks.fail("Case.settings", self.settings, "a RunSettings")
         s = self.settings
         limit = time_step_limit(self.scene)
         if s.dt is not None and s.dt > limit.dt:
-            raise _fail("RunSettings.dt", s.dt,
-                        f"{limit.valid_range()} (scene {self.scene.name or 'scene'!r})", "s")
+            raise _checks.fail("RunSettings.dt", s.dt,
+                               f"{limit.valid_range()} (scene {self.scene.name or 'scene'!r})", "s")
         dt = limit.default_dt() if s.dt is None else s.dt
         if s.sample_dt < dt:
-            raise _fail("RunSettings.sample_dt", s.sample_dt,
-                        f">= the time step dt = {dt:.6g} s of scene {self.scene.name or 'scene'!r}",
-                        "s")
+            raise _checks.fail(
+                "RunSettings.sample_dt", s.sample_dt,
+                f">= the time step dt = {dt:.6g} s of scene {self.scene.name or 'scene'!r}",
+                "s")
 
     @property
     def name(self) -> str:
@@ -301,9 +304,9 @@ def case_matrix(scenes: Iterable[Scene], *, seeds: int | Iterable[int] | None = 
     scene_list = list(scenes)
     for k, scene in enumerate(scene_list):
         if not isinstance(scene, Scene):
-            raise _fail(f"scenes[{k}]", scene, "a millscope Scene")
+            raise _checks.fail(f"scenes[{k}]", scene, "a millscope Scene")
     if settings is not None and not isinstance(settings, RunSettings):
-        raise _fail("settings", settings, "a RunSettings or None")
+        raise _checks.fail("settings", settings, "a RunSettings or None")
     base = (settings or RunSettings()).replace(**changes)
     seed_list = [base.seed] if seeds is None else _seeds(seeds)
     return [Case(scene, base.replace(seed=seed)) for scene in scene_list for seed in seed_list]
@@ -339,12 +342,12 @@ def paper_matrix(particles: str | None | Iterable[str | None] = ("ceramic", "ste
 def _seeds(seeds: object) -> list[int]:
     items = [seeds] if isinstance(seeds, Integral) else seeds
     if isinstance(items, (str, bytes)) or not isinstance(items, Iterable):
-        raise _fail("seeds", seeds, "an integer >= 0 or an iterable of them")
+        raise _checks.fail("seeds", seeds, "an integer >= 0 or an iterable of them")
     out = [_integer("seeds", s, 0) for s in items]
     if not out:
-        raise _fail("seeds", seeds, "an integer >= 0 or a non-empty iterable of them")
+        raise _checks.fail("seeds", seeds, "an integer >= 0 or a non-empty iterable of them")
     if len(set(out)) != len(out):
-        raise _fail("seeds", seeds, "free of repeats")
+        raise _checks.fail("seeds", seeds, "free of repeats")
     return out
 
 
@@ -622,7 +625,7 @@ def unreadable_cases(store: str | os.PathLike[str]) -> list[UnreadableCase]:
     """
     path = Path(store)
     if not path.is_dir():
-        raise _fail("store", str(store), "an existing campaign store directory")
+        raise _checks.fail("store", str(store), "an existing campaign store directory")
     listed: dict[str, dict[str, Any]] = {}
     if (path / "manifest.json").exists():
         listed = {e["hash"]: e for e in read_manifest(path).get("cases", [])
@@ -926,13 +929,13 @@ class Campaign:
                  settings: RunSettings | None = None, bandwidth: float = 0.3,
                  window: str = "hann") -> None:
         if settings is not None and not isinstance(settings, RunSettings):
-            raise _fail("settings", settings, "a RunSettings or None")
+            raise _checks.fail("settings", settings, "a RunSettings or None")
         base = settings or RunSettings()
         if duration is not None:
-            base = base.replace(duration_s=_positive("duration", duration, "s"))
+            base = base.replace(duration_s=_checks.positive("duration", duration, "s"))
         seed_list = [base.seed] if seeds is None else _seeds(seeds)
         if isinstance(cases, (Scene, Case, str, bytes)) or not isinstance(cases, Iterable):
-            raise _fail("cases", cases, "an iterable of Scene or Case")
+            raise _checks.fail("cases", cases, "an iterable of Scene or Case")
         out: list[Case] = []
         for k, item in enumerate(cases):
             if isinstance(item, Case):
@@ -940,9 +943,9 @@ class Campaign:
             elif isinstance(item, Scene):
                 out.extend(Case(item, base.replace(seed=s)) for s in seed_list)
             else:
-                raise _fail(f"cases[{k}]", item, "a Scene or a Case")
+                raise _checks.fail(f"cases[{k}]", item, "a Scene or a Case")
         if not out:
-            raise _fail("cases", cases, "a non-empty iterable of Scene or Case")
+            raise _checks.fail("cases", cases, "a non-empty iterable of Scene or Case")
         self._cases = tuple(out)
         self._hashes = tuple(c.hash() for c in out)
         first: dict[str, int] = {}
@@ -955,10 +958,10 @@ class Campaign:
 
         path = Path(store)
         if path.exists() and not path.is_dir():
-            raise _fail("store", str(store), "a directory (or a path to create one)")
+            raise _checks.fail("store", str(store), "a directory (or a path to create one)")
         self._store = path
-        self._bandwidth = _positive("bandwidth", bandwidth, "Hz")
-        self._window = _choice("window", window, ("hann", "hann_periodic", "rectangular"))
+        self._bandwidth = _checks.positive("bandwidth", bandwidth, "Hz")
+        self._window = _checks.choice("window", window, ("hann", "hann_periodic", "rectangular"))
         self._block = None if block is None else self._check_block(block)
         self._analysis = (None if self._block is None
                           else AnalysisSettings(self._block, self._bandwidth, self._window))
@@ -990,7 +993,7 @@ class Campaign:
         """
         path = Path(store)
         if not path.is_dir():
-            raise _fail("store", str(store), "an existing campaign store directory")
+            raise _checks.fail("store", str(store), "an existing campaign store directory")
         stored = _stored(path)
         if not stored:
             damaged = unreadable_cases(path)
@@ -1023,30 +1026,30 @@ class Campaign:
     def _check_block(self, block: object) -> tuple[float, float]:
         if (isinstance(block, (str, bytes)) or not isinstance(block, Iterable)
                 or len(pair := tuple(block)) != 2):
-            raise _fail("block", block, "a pair (t1, t2) of times in s, or None")
-        t1 = _real("block[0]", pair[0], "s", ">= 0")
-        t2 = _real("block[1]", pair[1], "s", "> block[0]")
+            raise _checks.fail("block", block, "a pair (t1, t2) of times in s, or None")
+        t1 = _checks.real("block[0]", pair[0], "s", ">= 0")
+        t2 = _checks.real("block[1]", pair[1], "s", "> block[0]")
         if not t1 < t2:
-            raise _fail("block", block, "(t1, t2) with t1 < t2 (s)")
+            raise _checks.fail("block", block, "(t1, t2) with t1 < t2 (s)")
         for k, c in enumerate(self._cases):
             s = c.settings
             eps = 1e-9 * s.sample_dt
             if t1 < s.warm_up_s - eps or t2 > s.duration_s + eps:
-                raise _fail("block", block,
-                            f"within the record of cases[{k}] ({c.name}), [warm_up_s, "
-                            f"duration_s] = [{s.warm_up_s:g}, {s.duration_s:g}] s")
+                raise _checks.fail("block", block,
+                                   f"within the record of cases[{k}] ({c.name}), [warm_up_s, "
+                                   f"duration_s] = [{s.warm_up_s:g}, {s.duration_s:g}] s")
             if (t2 - t1) / s.sample_dt < _MIN_BLOCK_SAMPLES - 1e-9:
-                raise _fail("block", block,
-                            f"at least {_MIN_BLOCK_SAMPLES} samples long, "
-                            f"{_MIN_BLOCK_SAMPLES * s.sample_dt:g} s at the sample_dt of "
-                            f"cases[{k}] ({c.name})")
+                raise _checks.fail("block", block,
+                                   f"at least {_MIN_BLOCK_SAMPLES} samples long, "
+                                   f"{_MIN_BLOCK_SAMPLES * s.sample_dt:g} s at the sample_dt of "
+                                   f"cases[{k}] ({c.name})")
             lifters = c.scene.drum.lifters
             if lifters is not None:
                 lth = lifters.count * c.scene.rotation_hz
                 if lth >= 0.5 / s.sample_dt:
-                    raise _fail(f"cases[{k}] ({c.name}) RunSettings.sample_dt", s.sample_dt,
-                                f"< {0.5 / lth:.6g} s so that the LTH at {lth:.4g} Hz lies "
-                                "below the Nyquist frequency", "s")
+                    raise _checks.fail(f"cases[{k}] ({c.name}) RunSettings.sample_dt", s.sample_dt,
+                                       f"< {0.5 / lth:.6g} s so that the LTH at {lth:.4g} Hz lies "
+                                       "below the Nyquist frequency", "s")
         return (t1, t2)
 
     # -- facts ---------------------------------------------------------------------------------
@@ -1125,24 +1128,24 @@ class Campaign:
         own_pool = executor is None
         if not own_pool:
             if not callable(getattr(executor, "submit", None)):
-                raise _fail("executor", executor, "None, a concurrent.futures Executor or a "
-                            "dask.distributed Client (an object with submit())")
+                raise _checks.fail("executor", executor, "None, a concurrent.futures Executor or a "
+                                   "dask.distributed Client (an object with submit())")
             if max_workers is not None:
-                raise _fail("max_workers", max_workers,
-                            "None when an executor is given (it applies to the local pool)")
+                raise _checks.fail("max_workers", max_workers,
+                                   "None when an executor is given (it applies to the local pool)")
         cores = _available_cores()
         if max_workers is not None:
             _integer("max_workers", max_workers, 1)
         if own_pool:
             threads = max(c.settings.threads for c in self._cases)
             if threads > cores:
-                raise _fail("RunSettings.threads", threads,
-                            f"<= {cores}, the cores this process may use, for the local "
-                            "pool (pass an executor to run elsewhere)")
+                raise _checks.fail("RunSettings.threads", threads,
+                                   f"<= {cores}, the cores this process may use, for the local "
+                                   "pool (pass an executor to run elsewhere)")
             if max_workers is not None and max_workers * threads > cores:
-                raise _fail("max_workers", max_workers,
-                            f"<= {cores // threads}: max_workers x threads per case "
-                            f"({threads}) may not exceed the {cores} cores")
+                raise _checks.fail("max_workers", max_workers,
+                                   f"<= {cores // threads}: max_workers x threads per case "
+                                   f"({threads}) may not exceed the {cores} cores")
 
         self._store.mkdir(parents=True, exist_ok=True)
         (self._store / "cases").mkdir(exist_ok=True)

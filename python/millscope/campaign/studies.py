@@ -64,11 +64,12 @@ from typing import Any
 
 import numpy as np
 
+from .. import _checks
 from .._files import atomic_write
 from ..calibration.logfit import log_fit, per_unit
 from ..model.contact import MAX_DT_FRACTION
 from ..model.presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
-from ..model.scene import Scene, _between, _choice, _fail, _positive, _real
+from ..model.scene import Scene
 from ..signal.analysis import WINDOWS, AnalysisSettings
 from ..signal.record import TorqueRecord
 from ..signal.spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
@@ -138,29 +139,30 @@ class Setting:
     scale: str = "tiny"
 
     def __post_init__(self) -> None:
-        dt = _real("Setting.dt_fraction", self.dt_fraction, "",
-                   f"in (0, {MAX_DT_FRACTION:g}] (time step / Rayleigh time)")
+        dt = _checks.real("Setting.dt_fraction", self.dt_fraction, "",
+                          f"in (0, {MAX_DT_FRACTION:g}] (time step / Rayleigh time)")
         if not 0.0 < dt <= MAX_DT_FRACTION:
-            raise _fail("Setting.dt_fraction", self.dt_fraction,
-                        f"in (0, {MAX_DT_FRACTION:g}] (time step / Rayleigh time; "
-                        f"{MAX_DT_FRACTION:g} is the engine's cap)")
+            raise _checks.fail("Setting.dt_fraction", self.dt_fraction,
+                               f"in (0, {MAX_DT_FRACTION:g}] (time step / Rayleigh time; "
+                               f"{MAX_DT_FRACTION:g} is the engine's cap)")
         g = self.shear_modulus_factor
         if g is not None:
             valid = "in (0, 1] (a fraction of the paper's shear moduli) or None (the scale's own)"
-            g = _real("Setting.shear_modulus_factor", g, "", valid)
+            g = _checks.real("Setting.shear_modulus_factor", g, "", valid)
             if not 0.0 < g <= 1.0:
-                raise _fail("Setting.shear_modulus_factor", self.shear_modulus_factor, valid)
+                raise _checks.fail("Setting.shear_modulus_factor", self.shear_modulus_factor, valid)
         why = f"warm-up and block together are at most {MAX_DURATION_S:g} s of rotation"
-        warm = _between("Setting.warm_up_s", self.warm_up_s, 0.0, MAX_DURATION_S, "s", why=why)
-        record = _between("Setting.record_s", self.record_s, 0.0, MAX_DURATION_S - warm, "s",
-                          low_open=True, why=why)
+        warm = _checks.between("Setting.warm_up_s", self.warm_up_s, 0.0, MAX_DURATION_S, "s",
+                               why=why)
+        record = _checks.between("Setting.record_s", self.record_s, 0.0, MAX_DURATION_S - warm,
+                                 "s", low_open=True, why=why)
         values = {
             "dt_fraction": dt,
             "shear_modulus_factor": g,
             "record_s": record,
             "warm_up_s": warm,
-            "sampling": _choice("Setting.sampling", self.sampling, SAMPLINGS),
-            "scale": _choice("Setting.scale", self.scale, tuple(SCALES)),
+            "sampling": _checks.choice("Setting.sampling", self.sampling, SAMPLINGS),
+            "scale": _checks.choice("Setting.scale", self.scale, tuple(SCALES)),
         }
         for name, value in values.items():
             object.__setattr__(self, name, value)
@@ -194,12 +196,12 @@ def _integers(where: str, value: object, valid: str, ok: Any) -> tuple[int, ...]
     """A non-empty tuple of distinct integers each passing ``ok``, else ValueError."""
     items = [value] if isinstance(value, Integral) else value
     if isinstance(items, (str, bytes)) or not isinstance(items, Iterable):
-        raise _fail(where, value, valid)
+        raise _checks.fail(where, value, valid)
     out = tuple(items)
     if (not out or len(set(out)) != len(out)
             or not all(isinstance(v, Integral) and not isinstance(v, (bool, np.bool_)) and ok(v)
                        for v in out)):
-        raise _fail(where, value, valid)
+        raise _checks.fail(where, value, valid)
     return tuple(int(v) for v in out)
 
 
@@ -260,14 +262,14 @@ class StudyPlan:
     def __post_init__(self) -> None:
         settings = self.settings
         if isinstance(settings, Setting) or not isinstance(settings, Iterable):
-            raise _fail("StudyPlan.settings", settings, "a sequence of at least 2 Setting")
+            raise _checks.fail("StudyPlan.settings", settings, "a sequence of at least 2 Setting")
         settings = tuple(settings)
         for k, s in enumerate(settings):
             if not isinstance(s, Setting):
-                raise _fail(f"StudyPlan.settings[{k}]", s, "a Setting")
+                raise _checks.fail(f"StudyPlan.settings[{k}]", s, "a Setting")
         if len(settings) < 2:
-            raise _fail("StudyPlan.settings", settings, "a sequence of at least 2 Setting "
-                        "(a reference and one to compare with it)")
+            raise _checks.fail("StudyPlan.settings", settings, "a sequence of at least 2 Setting "
+                               "(a reference and one to compare with it)")
         for k, s in enumerate(settings):
             if s in settings[:k]:
                 raise ValueError(f"StudyPlan.settings[{k}] = {s.label!r} is not valid; it "
@@ -276,18 +278,18 @@ class StudyPlan:
                           "at least 2 different integers >= 0 (the seed spread needs 2)",
                           lambda v: v >= 0)
         if len(seeds) < 2:
-            raise _fail("StudyPlan.seeds", self.seeds,
-                        "at least 2 different integers >= 0 (the seed spread needs 2)")
-        speed = _real("StudyPlan.speed_fraction", self.speed_fraction, "", "in (0, 1]")
+            raise _checks.fail("StudyPlan.seeds", self.seeds,
+                               "at least 2 different integers >= 0 (the seed spread needs 2)")
+        speed = _checks.real("StudyPlan.speed_fraction", self.speed_fraction, "", "in (0, 1]")
         if not 0.0 < speed <= 1.0:
-            raise _fail("StudyPlan.speed_fraction", self.speed_fraction,
-                        "in (0, 1] (a fraction of the critical speed; the paper's are 0.62, "
-                        "0.71, 0.80)")
+            raise _checks.fail("StudyPlan.speed_fraction", self.speed_fraction,
+                               "in (0, 1] (a fraction of the critical speed; the paper's are 0.62, "
+                               "0.71, 0.80)")
         if self.particles is not None and (not isinstance(self.particles, str)
                                            or self.particles not in PARTICLE_KINDS):
-            raise _fail("StudyPlan.particles", self.particles,
-                        f"one of {', '.join(repr(k) for k in PARTICLE_KINDS)} or None "
-                        "(balls only)")
+            raise _checks.fail("StudyPlan.particles", self.particles,
+                               f"one of {', '.join(repr(k) for k in PARTICLE_KINDS)} or None "
+                               "(balls only)")
         if self.particles is None:
             levels = _integers("StudyPlan.load_levels", self.load_levels,
                                "(1,) for balls only (particles=None)", lambda v: v == 1)
@@ -298,13 +300,13 @@ class StudyPlan:
         values: dict[str, Any] = {
             "settings": settings, "seeds": seeds, "speed_fraction": speed,
             "load_levels": levels,
-            "sample_dt": _positive("StudyPlan.sample_dt", self.sample_dt, "s"),
-            "bandwidth": _positive("StudyPlan.bandwidth", self.bandwidth, "Hz"),
-            "window": _choice("StudyPlan.window", self.window, tuple(WINDOWS)),
+            "sample_dt": _checks.positive("StudyPlan.sample_dt", self.sample_dt, "s"),
+            "bandwidth": _checks.positive("StudyPlan.bandwidth", self.bandwidth, "Hz"),
+            "window": _checks.choice("StudyPlan.window", self.window, tuple(WINDOWS)),
         }
         if (not isinstance(self.threads, Integral) or isinstance(self.threads, bool)
                 or self.threads < 1):
-            raise _fail("StudyPlan.threads", self.threads, "an integer >= 1")
+            raise _checks.fail("StudyPlan.threads", self.threads, "an integer >= 1")
         values["threads"] = int(self.threads)
         for name, value in values.items():
             object.__setattr__(self, name, value)
@@ -320,23 +322,26 @@ class StudyPlan:
         f_lth = lifter_harmonic_hz(lifters.count, scene.rotation_hz)
         nyquist = 0.5 / self.sample_dt
         if f_lth >= nyquist:
-            raise _fail("StudyPlan.sample_dt", self.sample_dt,
-                        f"< {0.5 / f_lth:.6g} s so that the LTH at {f_lth:.4g} Hz lies below the "
-                        "Nyquist frequency", "s")
+            raise _checks.fail(
+                "StudyPlan.sample_dt", self.sample_dt,
+                f"< {0.5 / f_lth:.6g} s so that the LTH at {f_lth:.4g} Hz lies below the "
+                "Nyquist frequency", "s")
         shortest = LTH_CLEAR_BINS / f_lth
         for k, s in enumerate(self.settings):
             if s.record_s < shortest:
-                raise _fail(f"StudyPlan.settings[{k}].record_s", s.record_s,
-                            f">= {shortest:.3g} s at {self.speed_fraction:g} of critical speed, "
-                            f"{LTH_CLEAR_BINS:g} periods of the LTH ({f_lth:.3g} Hz), so that "
-                            "the LTH is resolved apart from the mean", "s")
+                raise _checks.fail(
+                    f"StudyPlan.settings[{k}].record_s", s.record_s,
+                    f">= {shortest:.3g} s at {self.speed_fraction:g} of critical speed, "
+                    f"{LTH_CLEAR_BINS:g} periods of the LTH ({f_lth:.3g} Hz), so that "
+                    "the LTH is resolved apart from the mean", "s")
             for name in ("record_s", "warm_up_s"):
                 value = getattr(s, name)
                 samples = value / self.sample_dt
                 if abs(samples - round(samples)) > 1e-6 * max(1.0, samples):
-                    raise _fail(f"StudyPlan.settings[{k}].{name}", value,
-                                f"a whole number of samples of sample_dt = {self.sample_dt:g} s",
-                                "s")
+                    raise _checks.fail(
+                        f"StudyPlan.settings[{k}].{name}", value,
+                        f"a whole number of samples of sample_dt = {self.sample_dt:g} s",
+                        "s")
 
     def scene(self, setting: Setting, load_level: int) -> Scene:
         """The scene a setting runs at a load level.
@@ -373,9 +378,10 @@ class StudyPlan:
                 scene = self.scene(s, level)
                 dt = s.dt_fraction * scene.min_rayleigh_time()[0]
                 if self.sample_dt < dt:
-                    raise _fail("StudyPlan.sample_dt", self.sample_dt,
-                                f">= the time step {dt:.6g} s of settings[{k}] ({s.label}) at "
-                                f"load level {level}", "s")
+                    raise _checks.fail(
+                        "StudyPlan.sample_dt", self.sample_dt,
+                        f">= the time step {dt:.6g} s of settings[{k}] ({s.label}) at "
+                        f"load level {level}", "s")
                 for seed in self.seeds:
                     settings = RunSettings(seed=seed, duration_s=s.duration_s,
                                            warm_up_s=s.warm_up_s, sample_dt=self.sample_dt,
@@ -396,8 +402,8 @@ class StudyPlan:
         ref = self.reference
         if ref is not None:
             if not isinstance(ref, Setting) or ref not in self.settings:
-                raise _fail("StudyPlan.reference", ref,
-                            "None (the most expensive setting) or one of the settings")
+                raise _checks.fail("StudyPlan.reference", ref,
+                                   "None (the most expensive setting) or one of the settings")
             return ref
         costs = [self.planned_particle_steps(s) for s in self.settings]
         top = max(costs)
@@ -486,11 +492,11 @@ class StudyPlan:
         """
         reference = _base(reference)
         if "reference" in fields:
-            raise _fail("StudyPlan.around reference", fields["reference"],
-                        "given once, as the first argument")
+            raise _checks.fail("StudyPlan.around reference", fields["reference"],
+                               "given once, as the first argument")
         if not isinstance(ladders, Mapping):
-            raise _fail("StudyPlan.around ladders", ladders,
-                        "a mapping of knob name to its values")
+            raise _checks.fail("StudyPlan.around ladders", ladders,
+                               "a mapping of knob name to its values")
         settings = [reference]
         for knob, values in ladders.items():
             _knob(knob)
@@ -500,7 +506,7 @@ class StudyPlan:
                     settings.append(s)
         for k, s in enumerate(extra):
             if not isinstance(s, Setting):
-                raise _fail(f"StudyPlan.around extra[{k}]", s, "a Setting")
+                raise _checks.fail(f"StudyPlan.around extra[{k}]", s, "a Setting")
             if s not in settings:
                 settings.append(s)
         plan = cls(tuple(settings), reference=reference, **fields)
@@ -531,20 +537,20 @@ def _base(base: object) -> Setting:
     if base is None:
         return Setting()
     if not isinstance(base, Setting):
-        raise _fail("base", base, "a Setting")
+        raise _checks.fail("base", base, "a Setting")
     return base
 
 
 def _knob(knob: object) -> str:
-    return _choice("knob", knob, KNOBS)
+    return _checks.choice("knob", knob, KNOBS)
 
 
 def _values(where: str, values: object, least: int = 2) -> list[Any]:
     if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
-        raise _fail(where, values, f"a sequence of at least {least} values")
+        raise _checks.fail(where, values, f"a sequence of at least {least} values")
     items = list(values)
     if len(items) < least:
-        raise _fail(where, values, f"a sequence of at least {least} values")
+        raise _checks.fail(where, values, f"a sequence of at least {least} values")
     return items
 
 
@@ -841,8 +847,8 @@ class StudyResult:
             The error is the largest |error| over the setting's load levels (nan when the
             quantity is not available, e.g. the slope with one level).
         """
-        _choice("quantity", quantity, tuple(QUANTITIES))
-        _choice("cost", cost, COSTS)
+        _checks.choice("quantity", quantity, tuple(QUANTITIES))
+        _checks.choice("cost", cost, COSTS)
         out = []
         for s in self.settings:
             rows = [r for r in self.rows if r.setting == s]
@@ -903,7 +909,7 @@ class StudyResult:
         Setting or None
             None when none qualifies.
         """
-        bound = _positive("within", within)
+        bound = _checks.positive("within", within)
         ok = [p for p in self.summary(quantity, cost)
               if math.isfinite(p.error)
               and p.error + (2.0 * p.error_se if with_se else 0.0) <= bound]
@@ -1122,7 +1128,7 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
         when a case failed (the finished ones are kept in the store; a rerun retries).
     """
     if not isinstance(plan, StudyPlan):
-        raise _fail("plan", plan, "a StudyPlan")
+        raise _checks.fail("plan", plan, "a StudyPlan")
     order = sorted(range(len(plan.cases())),
                    key=lambda i: -plan.planned_particle_steps(plan.settings[plan._cases[i][0]]))
     campaign = Campaign([plan._cases[i][3] for i in order], store, block=None)
