@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import _checks
 from ..signal.analysis import MIN_SUB_BLOCKS, AnalysisSettings, sub_block_energies
 from .bootstrap import log_residuals, mean_factors, percentile_interval, pooled_mean_factors
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
@@ -141,12 +142,6 @@ class GroupAnalysis:
         return float(np.sqrt(np.mean(known**2))) if known.size else None
 
 
-def _integer_at_least(name: str, value: object, lowest: int) -> int:
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < lowest:
-        raise ValueError(f"{name} = {value!r} is not valid; it must be an integer >= {lowest}")
-    return int(value)
-
-
 def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
                      confidence: float = 0.95, seed: int = 0,
                      sub_blocks: int = 10) -> list[GroupAnalysis]:
@@ -206,9 +201,9 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
         (block, bandwidth, window, lifters, rotation, drum, materials, sample_dt, sampling);
         the message names the cases.
     """
-    bootstrap = _integer_at_least("bootstrap", bootstrap, 0)
-    seed = _integer_at_least("seed", seed, 0)
-    sub_blocks = _integer_at_least("sub_blocks", sub_blocks, MIN_SUB_BLOCKS)
+    bootstrap = _checks.integer("bootstrap", bootstrap, ValueError, low=0)
+    seed = _checks.integer("seed", seed, ValueError, low=0)
+    sub_blocks = _checks.integer("sub_blocks", sub_blocks, ValueError, low=MIN_SUB_BLOCKS)
     if not (isinstance(confidence, (int, float)) and 0 < confidence < 1):
         raise ValueError(f"confidence = {confidence!r} is not valid; it must be in (0, 1)")
     all_results = list(results)

@@ -62,8 +62,6 @@ from numbers import Integral
 from pathlib import Path
 from typing import Any, Literal
 
-import numpy as np
-
 from .. import _checks, _core
 from .._files import atomic_write, read_json
 from ..engine.simulation import Simulation, _available_cores
@@ -104,12 +102,6 @@ Status = Literal["done", "failed", "pending"]
 
 
 # -- cases -------------------------------------------------------------------------------------
-
-
-def _integer(where: str, value: object, lowest: int) -> int:
-    if not isinstance(value, Integral) or isinstance(value, (bool, np.bool_)) or value < lowest:
-        raise _checks.fail(where, value, f"an integer >= {lowest}")
-    return int(value)
 
 
 #: The longest rotation a case may simulate, s: an hour, 360,000 torque samples at 10 ms and
@@ -161,13 +153,13 @@ class RunSettings:
 
     def __post_init__(self) -> None:
         values: dict[str, Any] = {
-            "seed": _integer("RunSettings.seed", self.seed, 0),
+            "seed": _checks.integer("RunSettings.seed", self.seed, ValueError, low=0),
             "duration_s": _checks.between("RunSettings.duration_s", self.duration_s, 0.0,
                                           MAX_DURATION_S, "s", low_open=True,
                                           why="the longest rotation a case simulates"),
             "sample_dt": _checks.positive("RunSettings.sample_dt", self.sample_dt, "s"),
             "sampling": _checks.choice("RunSettings.sampling", self.sampling, SAMPLINGS),
-            "threads": _integer("RunSettings.threads", self.threads, 1),
+            "threads": _checks.integer("RunSettings.threads", self.threads, ValueError, low=1),
             "dt": None if self.dt is None else _checks.positive("RunSettings.dt", self.dt, "s"),
             "settle_tolerance": _checks.positive("RunSettings.settle_tolerance",
                                                  self.settle_tolerance),
@@ -343,7 +335,7 @@ def _seeds(seeds: object) -> list[int]:
     items = [seeds] if isinstance(seeds, Integral) else seeds
     if isinstance(items, (str, bytes)) or not isinstance(items, Iterable):
         raise _checks.fail("seeds", seeds, "an integer >= 0 or an iterable of them")
-    out = [_integer("seeds", s, 0) for s in items]
+    out = [_checks.integer("seeds", s, ValueError, low=0) for s in items]
     if not out:
         raise _checks.fail("seeds", seeds, "an integer >= 0 or a non-empty iterable of them")
     if len(set(out)) != len(out):
@@ -1135,7 +1127,7 @@ class Campaign:
                                    "None when an executor is given (it applies to the local pool)")
         cores = _available_cores()
         if max_workers is not None:
-            _integer("max_workers", max_workers, 1)
+            _checks.integer("max_workers", max_workers, ValueError, low=1)
         if own_pool:
             threads = max(c.settings.threads for c in self._cases)
             if threads > cores:
