@@ -156,7 +156,7 @@ def test_the_reader_sees_imports_at_every_level_and_skips_type_checking() -> Non
     subcommands' modules inside the subcommands, which count; the calibration names the
     campaign's CaseResult for annotations only, which does not."""
     reports = imports("millscope.report.reports", at_import_time=True)
-    assert {"millscope.campaign.runs", "millscope.calibration.fit",
+    assert {"millscope.campaign.runs", "millscope.campaign.store", "millscope.calibration.fit",
             "millscope.report.plots"} <= reports
     cli = imports("millscope.app.cli")
     assert {"millscope.report.plots", "millscope.app.demo", "millscope.campaign.studies"} <= cli

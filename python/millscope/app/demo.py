@@ -42,7 +42,8 @@ from ..calibration.fit import (
     log_fit,
     per_unit,
 )
-from ..campaign.runs import MAX_DURATION_S, Campaign, CaseResult, RunSettings
+from ..campaign.cases import MAX_DURATION_S, CaseResult, RunSettings
+from ..campaign.runs import Campaign
 from ..engine.simulation import _available_cores
 from ..model.presets import (
     LIFTER_COUNT,

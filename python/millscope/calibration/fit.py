@@ -44,7 +44,7 @@ from .groups import GroupAnalysis, analyze_campaign
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 
 if TYPE_CHECKING:  # for annotations only: the campaign sits above this layer
-    from ..campaign.runs import CaseResult
+    from ..campaign.cases import CaseResult
 
 __all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit", "Calibration",
            "CalibrationError", "FillEstimate", "estimate_fill", "OutsideCalibrationWarning", "NoIntervalWarning",

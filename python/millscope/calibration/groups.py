@@ -32,7 +32,7 @@ from .bootstrap import log_residuals, mean_factors, percentile_interval, pooled_
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 
 if TYPE_CHECKING:  # for annotations only: the campaign sits above this layer
-    from ..campaign.runs import CaseResult
+    from ..campaign.cases import CaseResult
 
 __all__ = ["GroupAnalysis", "analyze_campaign", "table6_markdown"]
 

@@ -1,25 +1,18 @@
 """The campaign layer: many cases run into a resumable store, and studies built on campaigns.
 
-:mod:`~millscope.campaign.runs` (cases, store, locks, executors, :class:`Campaign`) and
+:mod:`~millscope.campaign.cases` (RunSettings, Case, their matrices, CaseResult),
+:mod:`~millscope.campaign.store` (the result store: case files, manifest, lock),
+:mod:`~millscope.campaign.executors` (the worker side and the wait on any executor),
+:mod:`~millscope.campaign.runs` (:class:`Campaign`, which runs cases into a store) and
 :mod:`~millscope.campaign.studies` (error against run time). Imports the engine, the model, the
-calibration and the signal layers. The names of :mod:`~millscope.campaign.runs` are importable
-from here (``millscope.campaign.Campaign``).
+calibration and the signal layers. The public names of the first four are importable from
+here (``millscope.campaign.Campaign``), as from the former ``millscope.campaign`` module.
 """
 
-from .runs import (
-    CASE_FORMAT,
-    MANIFEST_FORMAT,
-    Campaign,
-    Case,
-    CaseResult,
-    RunSettings,
-    UnreadableCase,
-    case_matrix,
-    paper_matrix,
-    read_manifest,
-    run_case,
-    unreadable_cases,
-)
+from .cases import CASE_FORMAT, Case, CaseResult, RunSettings, case_matrix, paper_matrix
+from .executors import run_case
+from .runs import Campaign
+from .store import MANIFEST_FORMAT, UnreadableCase, read_manifest, unreadable_cases
 
 __all__ = [
     "CASE_FORMAT",

@@ -73,7 +73,8 @@ from ..model.scene import Scene
 from ..signal.analysis import WINDOWS, AnalysisSettings
 from ..signal.record import TorqueRecord
 from ..signal.spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
-from .runs import MAX_DURATION_S, Campaign, Case, CaseResult, RunSettings
+from .cases import MAX_DURATION_S, Case, CaseResult, RunSettings
+from .runs import Campaign
 
 __all__ = [
     "KNOBS",

@@ -35,7 +35,9 @@ from .. import _core
 from .._files import atomic_write
 from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
-from ..campaign.runs import Campaign, CaseResult, UnreadableCase, _listing, unreadable_cases
+from ..campaign.cases import CaseResult
+from ..campaign.runs import Campaign
+from ..campaign.store import UnreadableCase, _listing, unreadable_cases
 from ..campaign.studies import StudyResult
 from ..model.presets import case_key
 from ..signal.spectral import PEAK_DISTINCT_RATIO, spectrum
