@@ -3,8 +3,10 @@
 :mod:`~millscope.campaign.cases` (RunSettings, Case, their matrices, CaseResult),
 :mod:`~millscope.campaign.store` (the result store: case files, manifest, lock),
 :mod:`~millscope.campaign.executors` (the worker side and the wait on any executor),
-:mod:`~millscope.campaign.runs` (:class:`Campaign`, which runs cases into a store) and
-:mod:`~millscope.campaign.studies` (error against run time). Imports the engine, the model, the
+:mod:`~millscope.campaign.runs` (:class:`Campaign`, which runs cases into a store) and the
+study of error against run time: :mod:`~millscope.campaign.study_plans` (settings, plans),
+:mod:`~millscope.campaign.study_results` (rows, tables, CSV, Markdown) and
+:mod:`~millscope.campaign.studies` (:func:`run_study`, and every name of the study). Imports the engine, the model, the
 calibration and the signal layers. The public names of the first four are importable from
 here (``millscope.campaign.Campaign``), as from the former ``millscope.campaign`` module.
 """
