@@ -8,7 +8,7 @@ The same options and output as ``python -m millscope bench`` (``--help`` lists t
 
 from __future__ import annotations
 
-from millscope.bench import main
+from millscope.app.bench import main
 
 if __name__ == "__main__":
     raise SystemExit(main(prog="throughput.py"))

@@ -3,19 +3,21 @@
 The public API (docs/architecture.md, Public API) is re-exported here; submodules hold the details.
 """
 
-from importlib import import_module as _import_module
 from typing import Any as _Any
 
-from . import campaign, contact, drivetrain, presets, studies
+from . import _old_paths
 from ._core import build_info as _build_info
-from .campaign import Campaign, Case, CaseResult, RunSettings
-from .campaign_analysis import GroupAnalysis, analyze_campaign
-from .fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
-from .monitoring import WindowEstimate, monitor
-from .record import RecordError, TorqueRecord
-from .scene import Drum, Fraction, Lifters, Material, Pair, Scene
-from .simulation import CheckpointError, SettleWarning, Simulation
-from .spectral import (
+from .calibration.fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
+from .calibration.groups import GroupAnalysis, analyze_campaign
+from .calibration.monitoring import WindowEstimate, monitor
+from .campaign import Campaign, Case, CaseResult, RunSettings, studies
+from .campaign.studies import StudyPlan, StudyResult, run_study
+from .engine.simulation import CheckpointError, SettleWarning, Simulation
+from .model import contact, presets
+from .model.scene import Drum, Fraction, Lifters, Material, Pair, Scene
+from .signal import drivetrain
+from .signal.record import RecordError, TorqueRecord
+from .signal.spectral import (
     Peak,
     SpectralEnergy,
     Spectrum,
@@ -26,17 +28,18 @@ from .spectral import (
     spectrum,
     window_factors,
 )
-from .studies import StudyPlan, StudyResult, run_study
 
 __version__: str = _build_info()["version"]
 
-_LAZY_SUBMODULES = ("plots", "report")  # matplotlib is imported only when figures are asked for
+_old_paths.install()
 
 
 def __getattr__(name: str) -> _Any:
-    if name in _LAZY_SUBMODULES:
-        return _import_module(f".{name}", __name__)
+    # the report (it loads matplotlib) and the old module paths load on first use
+    if name == "report" or name in _old_paths.MOVED:
+        return _old_paths.module(name)
     raise AttributeError(f"module 'millscope' has no attribute {name!r}")
+
 
 __all__ = [
     "Calibration",

@@ -9,11 +9,18 @@ here, and NaN and infinities are refused, so that a value that passes can be com
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
 from typing import Any
 
-__all__ = ["as_float", "keys", "integer", "number", "show"]
+import numpy as np
+
+__all__ = ["MAX_LIFTERS", "as_float", "between", "choice", "count", "fail", "flag", "integer",
+           "keys", "number", "positive", "real", "show", "shown", "text", "tuple_of"]
+
+#: The most lifter bars a drum may have (a bar every 3 mm of the shell of a 10 m drum); here,
+#: below both the scene (model) and the spectra (signal), which check it.
+MAX_LIFTERS = 10_000
 
 
 def _is_number(value: object) -> bool:
@@ -115,3 +122,83 @@ def keys(where: str, data: object, error: type[ValueError], allowed: tuple[str, 
         raise error(f"{where}: unknown key {', '.join(unknown)}; the keys are "
                     f"{', '.join(allowed)}")
     return data
+
+
+# -- checks of values given in code (scenes, campaigns, studies): ValueError ----------------
+
+
+def shown(value: object) -> str:
+    """A value as error messages print it: numbers plainly (no ``np.float64(...)``)."""
+    if _is_number(value):
+        return show(value)
+    return repr(value)
+
+
+def fail(where: str, value: object, valid: str, unit: str = "") -> ValueError:
+    """``ValueError("<where> = <value> [unit] is not valid; it must be <valid>")``."""
+    unit = f" {unit}" if unit and _is_number(value) else ""
+    return ValueError(f"{where} = {shown(value)}{unit} is not valid; it must be {valid}")
+
+
+def real(where: str, value: object, unit: str, valid: str) -> float:
+    """A finite real number as float; ``valid`` is the range the caller goes on to check."""
+    x = as_float(value) if not isinstance(value, np.bool_) else math.nan
+    if not math.isfinite(x):
+        raise fail(where, value, f"a finite number {valid}".rstrip(), unit)
+    return x
+
+
+def positive(where: str, value: object, unit: str = "") -> float:
+    x = real(where, value, unit, "> 0")
+    if not x > 0.0:
+        raise fail(where, value, "> 0", unit)
+    return x
+
+
+def between(where: str, value: object, low: float, high: float, unit: str = "",
+             low_open: bool = False, why: str = "") -> float:
+    """A finite real number in [low, high] (or (low, high]) as float; ``why`` the range is
+    what it is goes into the message."""
+    unit_text = f" {unit}" if unit else ""
+    reason = f" ({why})" if why else ""
+    valid = f"in {'(' if low_open else '['}{low:g}, {high:g}]{unit_text}{reason}"
+    x = real(where, value, unit, valid)
+    if not ((x > low if low_open else x >= low) and x <= high):
+        raise fail(where, value, valid, unit)
+    return x
+
+
+def count(where: str, value: object, high: int | None = None) -> int:
+    if (not isinstance(value, Integral) or isinstance(value, (bool, np.bool_))
+            or int(value) < 1 or (high is not None and int(value) > high)):
+        raise fail(where, value, "an integer >= 1" if high is None else
+                    f"an integer in [1, {high}]")
+    return int(value)
+
+
+def flag(where: str, value: object) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise fail(where, value, "True or False")
+    return bool(value)
+
+
+def text(where: str, value: object, *, empty: bool = False) -> str:
+    if not isinstance(value, str) or (not empty and not value):
+        raise fail(where, value, "a string" if empty else "a non-empty string")
+    return value
+
+
+def choice(where: str, value: object, choices: tuple[str, ...]) -> str:
+    if not isinstance(value, str) or value not in choices:
+        raise fail(where, value, f"one of {', '.join(repr(c) for c in choices)}")
+    return value
+
+
+def tuple_of(where: str, value: object, kind: type, what: str) -> tuple[Any, ...]:
+    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
+        raise fail(where, value, f"a sequence of {what}")
+    items = tuple(value)
+    for k, item in enumerate(items):
+        if not isinstance(item, kind):
+            raise fail(f"{where}[{k}]", item, f"a {kind.__name__}")
+    return items

@@ -41,9 +41,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._files import read_npy_header
-from .contact import MAX_DT_FRACTION
-from .scene import Scene
+from .._files import read_npy_header
+from ..model.contact import MAX_DT_FRACTION
+from ..model.scene import Scene
 
 #: The shortest time step a checkpoint may hold, as a fraction of the scene's smallest Rayleigh
 #: time (the default step is 0.2 of it): below, a second of simulated time takes more than

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._samples import RecordError, bad_option
+from .._samples import RecordError, bad_option
 
 __all__ = ["TIME_UNITS", "TORQUE_UNITS", "ISO_TIME", "CsvOptions", "parse_meta", "read_torque_csv"]
 

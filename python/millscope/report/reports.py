@@ -31,15 +31,19 @@ from pathlib import Path
 from matplotlib.figure import Figure
 from tqdm.auto import tqdm
 
-from . import _core, plots
-from ._files import atomic_write
-from .campaign import Campaign, CaseResult, UnreadableCase, _listing, unreadable_cases
-from .campaign_analysis import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
-from .fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
-from .presets import case_key
-from .spectral import PEAK_DISTINCT_RATIO, spectrum
+from .. import _core
+from .._files import atomic_write
+from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
+from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
+from ..campaign.cases import CaseResult
+from ..campaign.runs import Campaign
+from ..campaign.store import UnreadableCase, _listing, unreadable_cases
+from ..campaign.studies import StudyResult
+from ..model.presets import case_key
+from ..signal.spectral import PEAK_DISTINCT_RATIO, spectrum
+from . import plots
 
-__all__ = ["UnreadableCasesError", "calibration_file_name", "write_report"]
+__all__ = ["UnreadableCasesError", "calibration_file_name", "write_report", "write_study"]
 
 REPORT_NAME = "report.md"
 
@@ -352,3 +356,22 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
     if unreadable:
         raise UnreadableCasesError(report, unreadable)
     return report
+
+
+def write_study(result: StudyResult, folder: str | os.PathLike[str], stem: str = "accuracy", *,
+                quantity: str = "energy") -> list[Path]:
+    """Writes a study's ``<stem>.csv``, ``<stem>.md`` and ``<stem>.png`` (error against wall
+    time, :func:`millscope.plots.plot_accuracy`) into ``folder``, each atomically.
+
+    Returns
+    -------
+    list of Path
+    """
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path, md_path = out / f"{stem}.csv", out / f"{stem}.md"
+    result.to_csv(csv_path)
+    with atomic_write(md_path, "w") as fh:
+        fh.write(result.to_markdown(quantity))
+    png = plots.save_figure(plots.plot_accuracy(result, quantity), out / f"{stem}.png")
+    return [csv_path, md_path, png]

@@ -28,7 +28,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _core
+from .. import _core
+from .._checks import MAX_LIFTERS
 from .record import TorqueRecord
 
 __all__ = [
@@ -57,8 +58,6 @@ _WINDOWS = ("hann", "hann_periodic", "rectangular")
 #: of lifters x rotation frequency, to lie clear of the mean's main lobe (2 bins with the Hann
 #: window) with a bin to spare.
 LTH_CLEAR_BINS = 6.0
-#: The most lifter bars a drum may have (a bar every 3 mm of the shell of a 10 m drum).
-MAX_LIFTERS = 10_000
 
 
 def _samples(data: Samples, sample_rate_hz: float | None) -> tuple[NDArray[np.float64], float]:

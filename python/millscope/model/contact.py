@@ -32,7 +32,7 @@ import math
 from dataclasses import dataclass
 from typing import Protocol, Union
 
-from . import _core
+from .. import _core
 
 __all__ = [
     "DEFAULT_DT_FRACTION",

@@ -59,7 +59,6 @@ from __future__ import annotations
 
 import json
 import math
-import numbers
 import os
 from collections.abc import Iterable
 from dataclasses import dataclass, fields
@@ -70,9 +69,9 @@ import numpy as np
 import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
-from . import _checks
-from ._files import MAX_JSON_BYTES, atomic_write, read_json
-from ._samples import check_samples
+from .. import _checks
+from .._files import MAX_JSON_BYTES, atomic_write, read_json
+from .._samples import check_samples
 from .record import TorqueRecord
 from .spectral import MAX_LIFTERS
 
@@ -99,19 +98,8 @@ class DriveError(ValueError):
 
 
 # -- validation helpers ---------------------------------------------------------------------------
-def _is_int(value: Any) -> bool:
-    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
-
-
 def _is_real(value: Any) -> bool:
     return math.isfinite(_checks.as_float(value))
-
-
-def _int_in(owner: str, name: str, value: Any, maximum: int) -> int:
-    if not (_is_int(value) and 1 <= int(value) <= maximum):
-        raise ValueError(f"{owner}.{name} = {value!r} is not valid; it must be an integer "
-                         f"in [1, {maximum}]")
-    return int(value)
 
 
 def _positive(owner: str, name: str, value: Any, unit: str = "") -> float:
@@ -152,7 +140,8 @@ class Motor:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "pole_pairs",
-                           _int_in("Motor", "pole_pairs", self.pole_pairs, MAX_POLE_PAIRS))
+                           _checks.integer("Motor.pole_pairs", self.pole_pairs, ValueError, low=1,
+                                           high=MAX_POLE_PAIRS))
         if (self.supply_hz is None) == (self.speed_hz is None):
             raise ValueError("Motor: give exactly one of supply_hz and speed_hz; got "
                              f"supply_hz = {self.supply_hz!r}, speed_hz = {self.speed_hz!r}")
@@ -221,7 +210,8 @@ class GearStage:
         for key in ("driver_teeth", "driven_teeth"):
             value = getattr(self, key)
             if value is not None:
-                object.__setattr__(self, key, _int_in("GearStage", key, value, MAX_TEETH))
+                object.__setattr__(self, key, _checks.integer(
+                    f"GearStage.{key}", value, ValueError, low=1, high=MAX_TEETH))
         both = self.driver_teeth is not None and self.driven_teeth is not None
         if self.ratio is not None:
             object.__setattr__(self, "ratio", _checks.number(
@@ -331,7 +321,8 @@ class DriveTrain:
                                  "a GearStage")
         object.__setattr__(self, "stages", stages)
         object.__setattr__(self, "lifters",
-                           _int_in("DriveTrain", "lifters", self.lifters, MAX_LIFTERS))
+                           _checks.integer("DriveTrain.lifters", self.lifters, ValueError, low=1,
+                                           high=MAX_LIFTERS))
         try:
             self.interference_lines()
         except ValueError:

@@ -23,18 +23,17 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ._checks import as_float, show
-from ._files import MAX_JSON_BYTES, read_json
+from .. import _checks
+from .._checks import MAX_LIFTERS
+from .._files import MAX_JSON_BYTES, read_json
 from .contact import MIN_RESTITUTION, rayleigh_time
-from .spectral import MAX_LIFTERS
 
 __all__ = [
     "CRITICAL_SPEED_CONVENTIONS",
@@ -76,87 +75,6 @@ class SceneError(ValueError):
 # -- validation helpers ------------------------------------------------------------------------
 
 
-def _is_real(value: object) -> bool:
-    return isinstance(value, Real) and not isinstance(value, (bool, np.bool_))
-
-
-def _show(value: object) -> str:
-    """A value as error messages print it: numbers plainly (no ``np.float64(...)``)."""
-    if _is_real(value):
-        return show(value)
-    return repr(value)
-
-
-def _fail(where: str, value: object, valid: str, unit: str = "") -> ValueError:
-    """``ValueError("<where> = <value> [unit] is not valid; it must be <valid>")``."""
-    unit = f" {unit}" if unit and _is_real(value) else ""
-    return ValueError(f"{where} = {_show(value)}{unit} is not valid; it must be {valid}")
-
-
-def _real(where: str, value: object, unit: str, valid: str) -> float:
-    """A finite real number as float; ``valid`` is the range the caller goes on to check."""
-    x = as_float(value) if not isinstance(value, np.bool_) else math.nan
-    if not math.isfinite(x):
-        raise _fail(where, value, f"a finite number {valid}".rstrip(), unit)
-    return x
-
-
-def _positive(where: str, value: object, unit: str = "") -> float:
-    x = _real(where, value, unit, "> 0")
-    if not x > 0.0:
-        raise _fail(where, value, "> 0", unit)
-    return x
-
-
-def _between(where: str, value: object, low: float, high: float, unit: str = "",
-             low_open: bool = False, why: str = "") -> float:
-    """A finite real number in [low, high] (or (low, high]) as float; ``why`` the range is
-    what it is goes into the message."""
-    unit_text = f" {unit}" if unit else ""
-    reason = f" ({why})" if why else ""
-    valid = f"in {'(' if low_open else '['}{low:g}, {high:g}]{unit_text}{reason}"
-    x = _real(where, value, unit, valid)
-    if not ((x > low if low_open else x >= low) and x <= high):
-        raise _fail(where, value, valid, unit)
-    return x
-
-
-def _count(where: str, value: object, high: int | None = None) -> int:
-    if (not isinstance(value, Integral) or isinstance(value, (bool, np.bool_))
-            or int(value) < 1 or (high is not None and int(value) > high)):
-        raise _fail(where, value, "an integer >= 1" if high is None else
-                    f"an integer in [1, {high}]")
-    return int(value)
-
-
-def _flag(where: str, value: object) -> bool:
-    if not isinstance(value, (bool, np.bool_)):
-        raise _fail(where, value, "True or False")
-    return bool(value)
-
-
-def _text(where: str, value: object, *, empty: bool = False) -> str:
-    if not isinstance(value, str) or (not empty and not value):
-        raise _fail(where, value, "a string" if empty else "a non-empty string")
-    return value
-
-
-def _choice(where: str, value: object, choices: tuple[str, ...]) -> str:
-    if not isinstance(value, str) or value not in choices:
-        raise _fail(where, value, f"one of {', '.join(repr(c) for c in choices)}")
-    return value
-
-
-def _tuple_of(where: str, value: object, kind: type, what: str) -> tuple[Any, ...]:
-    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
-        raise _fail(where, value, f"a sequence of {what}")
-    items = tuple(value)
-    for k, item in enumerate(items):
-        if not isinstance(item, kind):
-            raise _fail(f"{where}[{k}]", item, f"a {kind.__name__}")
-    return items
-
-
 def _set(obj: object, **values: object) -> None:
     """Store coerced values on a frozen dataclass (from ``__post_init__`` only)."""
     for k, v in values.items():
@@ -188,13 +106,13 @@ class Material:
     poisson: float
 
     def __post_init__(self) -> None:
-        name = _text("Material.name", self.name)
-        density = _between("Material.density", self.density, 1.0, MAX_DENSITY, "kg/m^3")
-        shear_modulus = _between("Material.shear_modulus", self.shear_modulus, 1.0,
-                                 MAX_SHEAR_MODULUS, "Pa")
-        nu = _real("Material.poisson", self.poisson, "", "in (-1, 0.5)")
+        name = _checks.text("Material.name", self.name)
+        density = _checks.between("Material.density", self.density, 1.0, MAX_DENSITY, "kg/m^3")
+        shear_modulus = _checks.between("Material.shear_modulus", self.shear_modulus, 1.0,
+                                        MAX_SHEAR_MODULUS, "Pa")
+        nu = _checks.real("Material.poisson", self.poisson, "", "in (-1, 0.5)")
         if not -1.0 < nu < 0.5:
-            raise _fail("Material.poisson", self.poisson, "in (-1, 0.5)")
+            raise _checks.fail("Material.poisson", self.poisson, "in (-1, 0.5)")
         _set(self, name=name, density=density, shear_modulus=shear_modulus, poisson=nu)
 
     @property
@@ -208,7 +126,7 @@ class Material:
         Reduced-stiffness scales use it: G x 0.01 makes the Rayleigh time, and the default
         time step, 10 times longer.
         """
-        scale = _positive("Material.with_shear_modulus factor", factor)
+        scale = _checks.positive("Material.with_shear_modulus factor", factor)
         return dataclasses.replace(self, shear_modulus=self.shear_modulus * scale)
 
 
@@ -233,9 +151,9 @@ class Pair:
     friction: float
 
     def __post_init__(self) -> None:
-        a, b = _text("Pair.a", self.a), _text("Pair.b", self.b)
-        e = _between("Pair.restitution", self.restitution, MIN_RESTITUTION, 1.0)
-        mu = _between("Pair.friction", self.friction, 0.0, MAX_FRICTION)
+        a, b = _checks.text("Pair.a", self.a), _checks.text("Pair.b", self.b)
+        e = _checks.between("Pair.restitution", self.restitution, MIN_RESTITUTION, 1.0)
+        mu = _checks.between("Pair.friction", self.friction, 0.0, MAX_FRICTION)
         _set(self, a=a, b=b, restitution=e, friction=mu)
 
     @property
@@ -278,14 +196,14 @@ class Lifters:
     phase: float = 0.0
 
     def __post_init__(self) -> None:
-        count = _count("Lifters.count", self.count, MAX_LIFTERS)
-        width = _positive("Lifters.width", self.width, "m")
-        height = _positive("Lifters.height", self.height, "m")
-        profile = _choice("Lifters.profile", self.profile, LIFTER_PROFILES)
+        count = _checks.count("Lifters.count", self.count, MAX_LIFTERS)
+        width = _checks.positive("Lifters.width", self.width, "m")
+        height = _checks.positive("Lifters.height", self.height, "m")
+        profile = _checks.choice("Lifters.profile", self.profile, LIFTER_PROFILES)
         top_width: float | None = None
         if profile == "rectangular":
             if self.top_width is not None:
-                raise _fail(
+                raise _checks.fail(
                     "Lifters.top_width",
                     self.top_width,
                     "None for rectangular lifters (their tip is as wide as their base)",
@@ -294,10 +212,10 @@ class Lifters:
         else:
             valid = f"in (0, width = {width:g} m] for trapezoidal lifters"
             if self.top_width is None:
-                raise _fail("Lifters.top_width", None, valid)
-            top_width = _real("Lifters.top_width", self.top_width, "m", valid)
+                raise _checks.fail("Lifters.top_width", None, valid)
+            top_width = _checks.real("Lifters.top_width", self.top_width, "m", valid)
             if not 0.0 < top_width <= width:
-                raise _fail("Lifters.top_width", self.top_width, valid, "m")
+                raise _checks.fail("Lifters.top_width", self.top_width, valid, "m")
         _set(
             self,
             count=count,
@@ -305,7 +223,7 @@ class Lifters:
             height=height,
             profile=profile,
             top_width=top_width,
-            phase=_real("Lifters.phase", self.phase, "rad", ""),
+            phase=_checks.real("Lifters.phase", self.phase, "rad", ""),
         )
 
     @property
@@ -346,14 +264,14 @@ class Drum:
     lifters: Lifters | None = None
 
     def __post_init__(self) -> None:
-        diameter = _between("Drum.diameter", self.diameter, *DRUM_DIAMETER_RANGE, "m")
+        diameter = _checks.between("Drum.diameter", self.diameter, *DRUM_DIAMETER_RANGE, "m")
         radius = 0.5 * diameter
         lift = self.lifters
         if lift is not None:
             if not isinstance(lift, Lifters):
-                raise _fail("Drum.lifters", lift, "a Lifters or None")
+                raise _checks.fail("Drum.lifters", lift, "a Lifters or None")
             if lift.height >= radius:
-                raise _fail(
+                raise _checks.fail(
                     "Drum.lifters.height", lift.height, f"< the drum radius {radius:g} m", "m"
                 )
             room = 2.0 * math.pi * (radius - lift.height)
@@ -366,10 +284,10 @@ class Drum:
         _set(
             self,
             diameter=diameter,
-            length=_between("Drum.length", self.length, 0.0, MAX_DRUM_LENGTH, "m",
-                            low_open=True),
-            material=_text("Drum.material", self.material),
-            end_walls=_flag("Drum.end_walls", self.end_walls),
+            length=_checks.between("Drum.length", self.length, 0.0, MAX_DRUM_LENGTH, "m",
+                                   low_open=True),
+            material=_checks.text("Drum.material", self.material),
+            end_walls=_checks.flag("Drum.end_walls", self.end_walls),
         )
 
     @property
@@ -423,14 +341,14 @@ class Fraction:
     name: str = ""
 
     def __post_init__(self) -> None:
-        material = _text("Fraction.material", self.material)
+        material = _checks.text("Fraction.material", self.material)
         _set(
             self,
             material=material,
-            diameter=_between("Fraction.diameter", self.diameter, MIN_SPHERE_DIAMETER,
-                              DRUM_DIAMETER_RANGE[1], "m"),
-            count=_count("Fraction.count", self.count, MAX_SPHERES),
-            name=_text("Fraction.name", self.name, empty=True) or material,
+            diameter=_checks.between("Fraction.diameter", self.diameter, MIN_SPHERE_DIAMETER,
+                                     DRUM_DIAMETER_RANGE[1], "m"),
+            count=_checks.count("Fraction.count", self.count, MAX_SPHERES),
+            name=_checks.text("Fraction.name", self.name, empty=True) or material,
         )
 
     @property
@@ -496,12 +414,12 @@ class Scene:
 
     def __post_init__(self) -> None:
         if not isinstance(self.drum, Drum):
-            raise _fail("Scene.drum", self.drum, "a Drum")
-        charge = _tuple_of("Scene.charge", self.charge, Fraction, "Fraction")
+            raise _checks.fail("Scene.drum", self.drum, "a Drum")
+        charge = _checks.tuple_of("Scene.charge", self.charge, Fraction, "Fraction")
         if not charge:
-            raise _fail("Scene.charge", self.charge, "a non-empty sequence of Fraction")
-        materials = _tuple_of("Scene.materials", self.materials, Material, "Material")
-        pairs = _tuple_of("Scene.pairs", self.pairs, Pair, "Pair")
+            raise _checks.fail("Scene.charge", self.charge, "a non-empty sequence of Fraction")
+        materials = _checks.tuple_of("Scene.materials", self.materials, Material, "Material")
+        pairs = _checks.tuple_of("Scene.pairs", self.pairs, Pair, "Pair")
         _set(self, charge=charge, materials=materials, pairs=pairs)
 
         index = _unique("Scene.materials", [m.name for m in materials], "material names")
@@ -513,27 +431,28 @@ class Scene:
         )
         known = f"one of the materials {sorted(index)}"
         if self.drum.material not in index:
-            raise _fail("Scene.drum.material", self.drum.material, known)
+            raise _checks.fail("Scene.drum.material", self.drum.material, known)
         for k, f in enumerate(charge):
             if f.material not in index:
-                raise _fail(f"Scene.charge[{k}].material", f.material, known)
+                raise _checks.fail(f"Scene.charge[{k}].material", f.material, known)
         spheres = sum(f.count for f in charge)
         if spheres > MAX_SPHERES:
-            raise _fail("Scene.charge", f"{spheres} spheres",
-                        f"at most {MAX_SPHERES} spheres (the engine indexes them with 32-bit "
-                        "integers)")
+            raise _checks.fail(
+                "Scene.charge", f"{spheres} spheres",
+                f"at most {MAX_SPHERES} spheres (the engine indexes them with 32-bit "
+                "integers)")
         self._check_pairs()
         _set(
             self,
-            critical_speed_convention=_choice(
+            critical_speed_convention=_checks.choice(
                 "Scene.critical_speed_convention",
                 self.critical_speed_convention,
                 CRITICAL_SPEED_CONVENTIONS,
             ),
-            gravity=_between("Scene.gravity", self.gravity, 0.0, MAX_GRAVITY, "m/s^2",
-                             low_open=True),
-            clamp_normal_force=_flag("Scene.clamp_normal_force", self.clamp_normal_force),
-            name=_text("Scene.name", self.name, empty=True),
+            gravity=_checks.between("Scene.gravity", self.gravity, 0.0, MAX_GRAVITY, "m/s^2",
+                                    low_open=True),
+            clamp_normal_force=_checks.flag("Scene.clamp_normal_force", self.clamp_normal_force),
+            name=_checks.text("Scene.name", self.name, empty=True),
         )
         self._check_room()
         self._check_speed()
@@ -545,7 +464,7 @@ class Scene:
         for p in self.pairs:
             for end in (p.a, p.b):
                 if end not in self._index:
-                    raise _fail(
+                    raise _checks.fail(
                         f"Scene.pairs[{p.label!r}]",
                         end,
                         f"one of the materials {sorted(self._index)}",
@@ -569,18 +488,18 @@ class Scene:
     def _check_speed(self) -> None:
         if (self.speed_fraction is None) == (self.speed_hz is None):
             raise ValueError(
-                f"Scene.speed_fraction = {_show(self.speed_fraction)} and Scene.speed_hz = "
-                f"{_show(self.speed_hz)} are not valid; exactly one of them must be given"
+                f"Scene.speed_fraction = {_checks.shown(self.speed_fraction)} and Scene.speed_hz = "
+                f"{_checks.shown(self.speed_hz)} are not valid; exactly one of them must be given"
             )
         if self.speed_fraction is not None:
             valid = f"in (0, {MAX_SPEED_FRACTION:g}] (a fraction of the critical speed)"
-            s = _real("Scene.speed_fraction", self.speed_fraction, "", valid)
+            s = _checks.real("Scene.speed_fraction", self.speed_fraction, "", valid)
             if not 0.0 < s <= MAX_SPEED_FRACTION:
-                raise _fail("Scene.speed_fraction", self.speed_fraction, valid)
+                raise _checks.fail("Scene.speed_fraction", self.speed_fraction, valid)
             _set(self, speed_fraction=s)
         else:
             top = MAX_SPEED_FRACTION * self.critical_speed_rad_s / (2.0 * math.pi)
-            _set(self, speed_hz=_between("Scene.speed_hz", self.speed_hz, 0.0, top, "Hz"))
+            _set(self, speed_hz=_checks.between("Scene.speed_hz", self.speed_hz, 0.0, top, "Hz"))
 
     def _check_room(self) -> None:
         drum = self.drum
@@ -588,16 +507,16 @@ class Scene:
         for f in self.charge:
             where = f"Scene.charge[{f.name!r}].diameter"
             if f.diameter >= gap:
-                raise _fail(
+                raise _checks.fail(
                     where,
                     f.diameter,
                     f"< {gap:.4g} m, the gap between the lifter tips and the axis",
                     "m",
                 )
             if drum.end_walls and f.diameter >= drum.length:
-                raise _fail(where, f.diameter, f"< the drum length {drum.length:g} m", "m")
+                raise _checks.fail(where, f.diameter, f"< the drum length {drum.length:g} m", "m")
             if not drum.end_walls and 2.0 * f.diameter > drum.length:
-                raise _fail(
+                raise _checks.fail(
                     where,
                     f.diameter,
                     f"<= {0.5 * drum.length:.4g} m: a drum with periodic ends needs a length "
@@ -720,9 +639,9 @@ class Scene:
             (solid volume / (1 - porosity)) / (pi R^2 L), dimensionless.
         """
         valid = "in [0, 1)"
-        phi = _real("Scene.bed_filling porosity", porosity, "", valid)
+        phi = _checks.real("Scene.bed_filling porosity", porosity, "", valid)
         if not 0.0 <= phi < 1.0:
-            raise _fail("Scene.bed_filling porosity", porosity, valid)
+            raise _checks.fail("Scene.bed_filling porosity", porosity, valid)
         return self.charge_volume() / (1.0 - phi) / self.drum.volume
 
     def rayleigh_times(self) -> list[tuple[str, float]]:
@@ -813,7 +732,7 @@ class Scene:
             )
         fmt = d.get("format")
         if fmt != SCENE_FORMAT:
-            raise _fail("Scene.from_dict format", fmt, repr(SCENE_FORMAT))
+            raise _checks.fail("Scene.from_dict format", fmt, repr(SCENE_FORMAT))
         body = {k: v for k, v in d.items() if k != "format"}
         args = _arguments(cls, body, "scene")
         drum = _arguments(Drum, args["drum"], "scene['drum']")

@@ -35,16 +35,16 @@ from dataclasses import MISSING, asdict, dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from . import _checks
-from ._files import MAX_JSON_BYTES, atomic_write, read_json
-from .analysis import WINDOWS, analyze_block, check_bandwidth
+from .. import _checks
+from .._files import MAX_JSON_BYTES, atomic_write, read_json
+from ..signal.analysis import WINDOWS, analyze_block, check_bandwidth
+from ..signal.record import TorqueRecord
+from ..signal.spectral import MAX_LIFTERS, RemoveItem, lifter_harmonic_hz
+from .groups import GroupAnalysis, analyze_campaign
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
-from .record import TorqueRecord
-from .spectral import MAX_LIFTERS, RemoveItem, lifter_harmonic_hz
 
-if TYPE_CHECKING:
-    from .campaign import CaseResult
-    from .campaign_analysis import GroupAnalysis
+if TYPE_CHECKING:  # for annotations only: the campaign sits above this layer
+    from ..campaign.cases import CaseResult
 
 __all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit", "Calibration",
            "CalibrationError", "FillEstimate", "estimate_fill", "OutsideCalibrationWarning", "NoIntervalWarning",
@@ -224,8 +224,6 @@ class Calibration:
             when the results hold several groups and none is chosen, or the chosen one is not
             there (the message names the groups); when the group has a single load level.
         """
-        from .campaign_analysis import analyze_campaign  # above fit in the layering
-
         groups = analyze_campaign(results, bootstrap=bootstrap, confidence=confidence,
                                   seed=seed, sub_blocks=sub_blocks)
         names = [g.name for g in groups]

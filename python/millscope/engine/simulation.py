@@ -49,11 +49,12 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _checkpoint, _core
-from ._files import atomic_write
-from .record import TorqueRecord
-from .scene import Scene
-from .stiffness import time_step_limit, upper_impact_speed
+from .. import _core
+from .._files import atomic_write
+from ..model.scene import Scene
+from ..model.stiffness import time_step_limit, upper_impact_speed
+from ..signal.record import TorqueRecord
+from . import checkpoint as _checkpoint
 
 __all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation", "check_threads"]
 

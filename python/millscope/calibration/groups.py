@@ -7,9 +7,10 @@ LTH frequency and amplitude (Figs. 10-11), energy per unit (Fig. 14) and its log
 :func:`table6_markdown` writes the Table 6 analogue.
 
 Each case's block was analysed by the campaign (:func:`~millscope.analysis.analyze_block`);
-this module builds on :class:`~millscope.campaign.CaseResult` and the presets' case keys, so it
-sits above the campaign in the layering. :mod:`millscope.report` and
-:meth:`millscope.Calibration.from_results` use it.
+this module reads the attributes of :class:`~millscope.campaign.CaseResult` (``status``,
+``analysis``, ``record``, ``scene``, ``key``, ...) without importing the campaign, so that it
+sits below the campaign in the layering, where :meth:`millscope.Calibration.from_results` and
+:mod:`millscope.report` use it.
 
 Units: s, Hz, N m, (N m)^2 s; per-unit values are dimensionless.
 """
@@ -20,16 +21,18 @@ import math
 import zlib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .analysis import MIN_SUB_BLOCKS, AnalysisSettings, sub_block_energies
+from .. import _checks
+from ..signal.analysis import MIN_SUB_BLOCKS, AnalysisSettings, sub_block_energies
 from .bootstrap import log_residuals, mean_factors, percentile_interval, pooled_mean_factors
-from .campaign import CaseResult
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
-from .presets import case_key
+
+if TYPE_CHECKING:  # for annotations only: the campaign sits above this layer
+    from ..campaign.cases import CaseResult
 
 __all__ = ["GroupAnalysis", "analyze_campaign", "table6_markdown"]
 
@@ -139,12 +142,6 @@ class GroupAnalysis:
         return float(np.sqrt(np.mean(known**2))) if known.size else None
 
 
-def _integer_at_least(name: str, value: object, lowest: int) -> int:
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < lowest:
-        raise ValueError(f"{name} = {value!r} is not valid; it must be an integer >= {lowest}")
-    return int(value)
-
-
 def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
                      confidence: float = 0.95, seed: int = 0,
                      sub_blocks: int = 10) -> list[GroupAnalysis]:
@@ -204,9 +201,9 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
         (block, bandwidth, window, lifters, rotation, drum, materials, sample_dt, sampling);
         the message names the cases.
     """
-    bootstrap = _integer_at_least("bootstrap", bootstrap, 0)
-    seed = _integer_at_least("seed", seed, 0)
-    sub_blocks = _integer_at_least("sub_blocks", sub_blocks, MIN_SUB_BLOCKS)
+    bootstrap = _checks.integer("bootstrap", bootstrap, ValueError, low=0)
+    seed = _checks.integer("seed", seed, ValueError, low=0)
+    sub_blocks = _checks.integer("sub_blocks", sub_blocks, ValueError, low=MIN_SUB_BLOCKS)
     if not (isinstance(confidence, (int, float)) and 0 < confidence < 1):
         raise ValueError(f"confidence = {confidence!r} is not valid; it must be in (0, 1)")
     all_results = list(results)
@@ -222,7 +219,7 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
         if r.analysis is None or not math.isfinite(r.energy):
             raise ValueError(f"case {r.case.name} ({r.hash[:12]}) was not analysed over a block; "
                              "give the Campaign a block=(t1, t2)")
-        key = case_key(r.scene)
+        key = r.key
         if key.load_level is None or key.particles is None:
             continue
         speed = key.speed_fraction if key.speed_fraction is not None else key.rotation_hz

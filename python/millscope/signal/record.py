@@ -32,8 +32,8 @@ from typing import IO, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._files import atomic_write, read_npy_header
-from ._samples import RecordError, bad_option, check_samples, real_option, step_jitter
+from .._files import atomic_write, read_npy_header
+from .._samples import RecordError, bad_option, check_samples, real_option, step_jitter
 from ._torque_csv import CsvOptions, parse_meta, read_torque_csv
 
 __all__ = ["TorqueRecord", "RecordError"]

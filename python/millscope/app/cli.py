@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TypeVar
 
-from . import __version__
+from .. import __version__
 
 EXIT_BAD_INPUT = 2
 T = TypeVar("T")
@@ -53,7 +53,7 @@ def _positive_int(text: str) -> int:
 
 def cmd_info(_: argparse.Namespace) -> int:
     """Print version and build facts."""
-    from ._core import build_info
+    from .._core import build_info
 
     info = build_info()
     print(f"millscope {__version__}")
@@ -75,11 +75,11 @@ def cmd_info(_: argparse.Namespace) -> int:
 
 def cmd_analyze(args: argparse.Namespace) -> int:
     """Analyse one torque file: mean, LTH, spectral energy; write plots."""
-    from . import plots
-    from .analysis import analyze_block
-    from .drivetrain import DriveTrain, decimate_record
-    from .record import TorqueRecord
-    from .spectral import RemoveItem, band_stop, spectrum
+    from ..report import plots
+    from ..signal.analysis import analyze_block
+    from ..signal.drivetrain import DriveTrain, decimate_record
+    from ..signal.record import TorqueRecord
+    from ..signal.spectral import RemoveItem, band_stop, spectrum
 
     raw = TorqueRecord.load(args.file, **torque_file_options(args))
     lines: list[float] = []
@@ -136,10 +136,10 @@ def _confidence(text: str) -> float:
 
 def cmd_monitor(args: argparse.Namespace) -> int:
     """A filling estimate per window of a long torque record."""
-    from .drivetrain import DriveTrain
-    from .fit import Calibration
-    from .monitoring import monitor_record
-    from .record import TorqueRecord
+    from ..calibration.fit import Calibration
+    from ..calibration.monitoring import monitor_record
+    from ..signal.drivetrain import DriveTrain
+    from ..signal.record import TorqueRecord
 
     calibration = Calibration.load(args.calibration)
     drive = None if args.drive is None else DriveTrain.load(args.drive)
@@ -176,7 +176,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
 def cmd_report(args: argparse.Namespace) -> int:
     """The report of a campaign store; exit code 2 with one error line naming the case files
     it could not read, after writing the report of the others."""
-    from .report import UnreadableCasesError, write_report
+    from ..report.reports import UnreadableCasesError, write_report
 
     try:
         path = write_report(args.store, args.out, progress=not args.no_progress,
@@ -234,7 +234,8 @@ _STUDY_LADDERS = (("dt_fraction", "vary_dt_fraction"), ("shear_modulus_factor", 
 
 def cmd_study_accuracy(args: argparse.Namespace) -> int:
     """Error against run time: a reference setting and one-knob ladders around it."""
-    from .studies import Setting, StudyPlan, run_study
+    from ..campaign.studies import Setting, StudyPlan, run_study
+    from ..report.reports import write_study
 
     reference = Setting(dt_fraction=args.dt_fraction, shear_modulus_factor=args.shear,
                         record_s=args.record, warm_up_s=args.warm_up, sampling=args.sampling,
@@ -263,7 +264,7 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
                         out / "store", "runs")
     if result is None:
         return EXIT_INTERRUPTED
-    written = result.write(out, quantity=args.quantity)
+    written = write_study(result, out, quantity=args.quantity)
     print(result.to_markdown(args.quantity))
     for path in written:
         print(f"wrote {path}")
@@ -279,9 +280,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def cmd_advise(args: argparse.Namespace) -> int:
     """Stiffness advice for a preset case or a scene file (millscope.stiffness)."""
-    from .presets import pilot_mill
-    from .scene import Scene
-    from .stiffness import StiffnessWarning, advise_stiffness
+    from ..model.presets import pilot_mill
+    from ..model.scene import Scene
+    from ..model.stiffness import StiffnessWarning, advise_stiffness
 
     if args.scene is not None:
         scene = Scene.load(args.scene)

@@ -31,11 +31,8 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import plots
-from ._files import atomic_write
-from .analysis import analyze_block
-from .campaign import MAX_DURATION_S, Campaign, CaseResult, RunSettings
-from .fit import (
+from .._files import atomic_write
+from ..calibration.fit import (
     MIN_LEVELS_FOR_INTERVALS,
     Calibration,
     LogFit,
@@ -45,12 +42,23 @@ from .fit import (
     log_fit,
     per_unit,
 )
-from .presets import LIFTER_COUNT, LOAD_LEVELS, PARTICLE_KINDS, SCALES, paper_cases, pilot_mill
-from .record import TorqueRecord
-from .report import calibration_file_name, write_report
-from .simulation import _available_cores
-from .spectral import LTH_CLEAR_BINS, band_stop, lifter_harmonic_hz, spectrum
-from .synthetic import PAPER_HDMS_LAW, SyntheticTorque, synthetic_record
+from ..campaign.cases import MAX_DURATION_S, CaseResult, RunSettings
+from ..campaign.runs import Campaign
+from ..engine.simulation import _available_cores
+from ..model.presets import (
+    LIFTER_COUNT,
+    LOAD_LEVELS,
+    PARTICLE_KINDS,
+    SCALES,
+    paper_cases,
+    pilot_mill,
+)
+from ..report import plots
+from ..report.reports import calibration_file_name, write_report
+from ..signal.analysis import analyze_block
+from ..signal.record import TorqueRecord
+from ..signal.spectral import LTH_CLEAR_BINS, band_stop, lifter_harmonic_hz, spectrum
+from ..signal.synthetic import PAPER_HDMS_LAW, SyntheticTorque, synthetic_record
 
 __all__ = ["DemoPlan", "DemoResult", "main_job_section", "pilot_mill_rotation_hz", "run_demo",
            "run_synthetic_demo"]

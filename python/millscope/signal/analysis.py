@@ -8,10 +8,10 @@ campaign analyses its cases; :func:`sub_block_energies` gives the scatter of one
 energy.
 
 The analysis of a whole campaign (groups of cases, Table 6, bootstrap intervals) lives in
-:mod:`millscope.campaign_analysis`, which builds on campaign results; this module stays below
-the campaign in the layering (it imports neither the campaign nor the scenes).
-``millscope.analysis.analyze_campaign``, ``GroupAnalysis`` and ``table6_markdown`` are still
-importable from here, for code written before the split; they are loaded on first use.
+:mod:`millscope.calibration.groups`, which builds on campaign results; this module stays in
+the signal layer (it imports neither the campaign nor the scenes). The old path
+``millscope.analysis`` (this module and the three names of the groups' analysis) is kept by
+the top-level ``millscope/analysis.py``.
 
 Units: s, Hz, N m, (N m)^2 s.
 """
@@ -21,13 +21,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from importlib import import_module
 from typing import Any, get_args
 
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _checks
+from .. import _checks
 from .record import TorqueRecord
 from .spectral import (
     Peak,
@@ -40,17 +39,6 @@ from .spectral import (
 
 __all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block", "check_bandwidth",
            "sub_block_energies"]
-
-#: Names of :mod:`millscope.campaign_analysis` still importable from here (loaded lazily: the
-#: campaign analysis imports the campaign, which imports this module).
-_MOVED_TO_CAMPAIGN_ANALYSIS = ("GroupAnalysis", "analyze_campaign", "table6_markdown")
-
-
-def __getattr__(name: str) -> Any:
-    if name in _MOVED_TO_CAMPAIGN_ANALYSIS:
-        return getattr(import_module(".campaign_analysis", __package__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
 
 WINDOWS: tuple[str, ...] = get_args(WindowName)  # the windows spectral knows
 MIN_SUB_BLOCK_SAMPLES = 32  # a sub-block of fewer samples loses most of its band to the removal

@@ -26,7 +26,8 @@ import math
 import warnings
 from dataclasses import dataclass
 
-from .drivetrain import DriveTrain, decimate_record
+from ..signal.drivetrain import DriveTrain, decimate_record
+from ..signal.record import TorqueRecord
 from .fit import (
     Calibration,
     NoIntervalWarning,
@@ -34,7 +35,6 @@ from .fit import (
     estimate_fill,
     no_interval_reason,
 )
-from .record import TorqueRecord
 
 __all__ = ["MissingBandWarning", "MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
 

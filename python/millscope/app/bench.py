@@ -35,17 +35,17 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import TextIO
 
-from . import presets
-from ._core import build_info
-from .scene import Scene
-from .simulation import (
+from .._core import build_info
+from ..engine.simulation import (
     CHECKPOINT_FORMAT,
     Simulation,
     _available_cores,
     check_threads,
     threads_range,
 )
-from .stiffness import time_step_limit
+from ..model import presets
+from ..model.scene import Scene
+from ..model.stiffness import time_step_limit
 
 __all__ = [
     "DEFAULT_CACHE_DIR",

@@ -25,13 +25,13 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, NullFormatter
 from numpy.typing import ArrayLike, NDArray
 
-from ._files import atomic_write
-from .fit import LogFit
-from .record import TorqueRecord
-from .spectral import Spectrum
+from .._files import atomic_write
+from ..calibration.fit import LogFit
+from ..signal.record import TorqueRecord
+from ..signal.spectral import Spectrum
 
 if TYPE_CHECKING:  # the figures stay below the simulation side (docs/architecture.md, Layers)
-    from .studies import StudyResult
+    from ..campaign.studies import StudyResult
 
 __all__ = ["plot_torque", "plot_spectrum", "plot_filtered", "plot_waterfall",
            "plot_spectra_grid", "plot_torque_levels", "plot_lth_levels", "plot_energy_levels",

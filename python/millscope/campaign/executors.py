@@ -1,0 +1,180 @@
+"""Running cases: the worker side (:func:`run_case`, the local pool's worker processes, which
+end with their campaign) and waiting on any executor (a ``concurrent.futures`` pool or a
+``dask.distributed`` Client).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import multiprocessing
+import multiprocessing.context
+import multiprocessing.process
+import os
+import signal
+import socket
+import sys
+import threading
+import time
+import traceback
+import types
+from collections.abc import Callable, Iterator, Mapping
+from typing import Any
+
+from ..engine.simulation import Simulation
+from .cases import Case
+
+__all__ = ["run_case"]
+
+_TRACEBACK_FRAMES = 12  # frames kept in a failed case's traceback summary (the innermost)
+_TRACEBACK_CHARS = 8000
+_TERMINATE_WAIT_S = 10.0  # how long to wait for a terminated worker process to end, s
+_ORPHAN_EXIT_CODE = 70  # a worker's exit status when it ends because its campaign died
+_TICK_S = 5.0  # the progress bar is redrawn this often while no case finishes, s
+_MAIN_SWAP_LOCK = threading.Lock()  # one worker launch at a time hides __main__
+
+
+# -- the worker side ---------------------------------------------------------------------------
+
+
+def _start_worker() -> None:
+    """Pool initializer: idle workers ignore Ctrl-C (the campaign handles it; a running
+    simulation still stops on it, and its case is then reported as failed), and a watchdog
+    thread ends the worker as soon as the campaign process is gone (killed by SIGKILL or
+    SIGTERM): its case would be lost anyway, and an orphaned worker would otherwise wait on its
+    queue for ever, holding the caller's stdout and multiprocessing's resource tracker."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    parent = multiprocessing.parent_process()
+    if parent is not None:
+        threading.Thread(target=_exit_with, args=(parent,), name="millscope-orphan-watchdog",
+                         daemon=True).start()
+
+
+def _exit_with(parent: multiprocessing.process.BaseProcess) -> None:
+    """Waits for ``parent`` to end, then ends this process at once. The wait is on the
+    parent's sentinel (a pipe that reads end-of-file when the parent dies, or its process
+    handle on Windows), so it costs nothing while the parent lives."""
+    parent.join()
+    os._exit(_ORPHAN_EXIT_CODE)
+
+
+class _WorkerProcess(multiprocessing.context.SpawnProcess):
+    """A spawned process that does not run the caller's main module.
+
+    ``spawn`` (and ``forkserver``) children import the parent's ``__main__`` (a script by its
+    path, ``python -m`` by its name) so that functions defined there can be unpickled; a script
+    without an ``if __name__ == "__main__":`` guard then starts its campaign again in every
+    worker. A campaign's workers need nothing from ``__main__`` (they call :func:`run_case` with
+    a plain dict), so while this process is launched ``__main__`` is a bare module and the child
+    is told of no main module, as when started from a notebook or the REPL."""
+
+    @staticmethod
+    def _Popen(process_obj: Any) -> Any:  # multiprocessing's hook, called by start()
+        with _MAIN_SWAP_LOCK:
+            main = sys.modules["__main__"]
+            sys.modules["__main__"] = types.ModuleType("__main__")
+            try:
+                return multiprocessing.context.SpawnProcess._Popen(process_obj)
+            finally:
+                sys.modules["__main__"] = main
+
+
+class _WorkerContext(multiprocessing.context.SpawnContext):
+    """The ``spawn`` context with :class:`_WorkerProcess` processes: the local pool's."""
+
+    Process = _WorkerProcess
+
+
+def _traceback_summary(exc: BaseException) -> str:
+    text = "".join(traceback.TracebackException.from_exception(
+        exc, limit=-_TRACEBACK_FRAMES).format())
+    return text if len(text) <= _TRACEBACK_CHARS else "...\n" + text[-_TRACEBACK_CHARS:]
+
+
+def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
+    """Runs one case where it is called (a worker); never raises for a failing case.
+
+    Parameters
+    ----------
+    case : mapping
+        :meth:`Case.to_dict` (plain data, so any executor can ship it).
+
+    Returns
+    -------
+    dict
+        ``status`` "done" with ``time_s``, ``torque_Nm`` (arrays: s, N m) and ``meta``, or
+        "failed" with ``error`` and ``traceback``; always ``hash``, ``wall_time_s`` (s),
+        ``host`` and ``pid``.
+    """
+    start = time.perf_counter()
+    where = {"host": socket.gethostname(), "pid": os.getpid()}
+    digest = ""
+    try:
+        c = Case.from_dict(case)
+        digest = c.hash()
+        s = c.settings
+        # A case keeps the torque alone: the energy ledger would cost a quarter of the run
+        # and change nothing in it (Simulation, track_energy).
+        sim = Simulation(c.scene, seed=s.seed, dt=s.dt, threads=s.threads,
+                         settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
+                         settle_max_s=s.settle_max_s, track_energy=False)
+        rec = sim.run(s.total_samples * s.sample_dt, sample_dt=s.sample_dt,
+                      sampling=s.sampling,  # type: ignore[arg-type]  # checked by RunSettings
+                      progress=False)
+        if rec.meta.get("interrupted") or len(rec) != s.total_samples:
+            raise RuntimeError(f"the run was interrupted after {len(rec)} of "
+                               f"{s.total_samples} samples")
+        settle = sim.settle_report
+        meta = rec.meta
+        meta["settle"] = None if settle is None else dataclasses.asdict(settle)
+        return {"status": "done", "hash": digest, "time_s": rec.time_s[s.warm_up_samples:],
+                "torque_Nm": rec.torque_Nm[s.warm_up_samples:], "meta": meta,
+                "wall_time_s": time.perf_counter() - start, **where}
+    except Exception as exc:  # a failing case is reported, not raised
+        return {"status": "failed", "hash": digest, "error": f"{type(exc).__name__}: {exc}",
+                "traceback": _traceback_summary(exc),
+                "wall_time_s": time.perf_counter() - start, **where}
+
+
+# -- the campaign ------------------------------------------------------------------------------
+
+
+def _terminate_workers(pool: Any) -> None:
+    """Stops the processes of our own pool at once (Ctrl-C, or an error in the campaign):
+    their cases are lost either way, and a queued case would otherwise start and run to its
+    end. ``terminate_workers`` is public from Python 3.14; before, the pool's process table."""
+    terminate = getattr(pool, "terminate_workers", None)
+    if callable(terminate):
+        terminate()
+        return
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.terminate()
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.join(_TERMINATE_WAIT_S)
+
+
+def _is_dask_client(executor: object) -> bool:
+    return type(executor).__module__.split(".")[0] == "distributed"
+
+
+def _completed(executor: object, futures: list[Any],
+               tick: Callable[[], object] | None = None) -> Iterator[Any]:
+    """Futures as they finish: dask's ``as_completed`` for a dask Client, else
+    ``concurrent.futures.wait``, calling ``tick`` every :data:`_TICK_S` s while none finishes
+    (so that the progress bar's elapsed time keeps moving through long cases)."""
+    if _is_dask_client(executor):
+        from distributed import as_completed as dask_as_completed
+
+        yield from dask_as_completed(futures)
+        return
+    from concurrent.futures import FIRST_COMPLETED, wait
+
+    pending = set(futures)
+    while pending:
+        done, pending = wait(pending, timeout=_TICK_S, return_when=FIRST_COMPLETED)
+        if not done and tick is not None:
+            tick()
+        yield from (f for f in futures if f in done)  # in submission order

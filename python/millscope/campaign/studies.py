@@ -1,0 +1,154 @@
+"""Error against run time: what each speed-up knob costs in accuracy (issue "Error against run
+time", item 1).
+
+A study runs the pilot mill (:func:`millscope.presets.pilot_mill`) under a ladder of
+:class:`Setting` s and reports, for each, the run time and the error of what the analysis gives
+(mean torque, spectral energy with the mean and the LTH removed, LTH amplitude and, for several
+load levels, the log-fit slope a) against one **reference** setting, by default the most
+expensive one. The knobs of a setting:
+
+* ``dt_fraction``: the time step as a fraction of the smallest Rayleigh time (the engine's
+  default is 0.2, its limit 0.5);
+* ``shear_modulus_factor``: every shear modulus as a fraction of the paper's (1, 0.1, 0.01,
+  0.001), or None for the scale's own;
+* ``record_s`` and ``warm_up_s``: the analysed block and the rotation before it, s;
+* ``sampling``: ``"instant"`` (as the paper) or ``"mean"`` (anti-aliased);
+* ``scale``: a scale of :data:`millscope.presets.SCALES` (the whole mill or an axial slice).
+
+Each setting runs with several filling seeds, so that noise can be told from bias: a row
+gives the error of the seed mean against the reference's seed mean, the spread of one run (the
+standard deviation over the seeds) and the standard error of the error (both means' seed
+noise). An error well above its standard error is a bias of the setting; one within it is
+noise.
+
+The runs are the cases of one :class:`~millscope.campaign.Campaign` (store, resume, executors,
+progress bar as there; each case is analysed as the campaign analyses its cases,
+:meth:`~millscope.campaign.CaseResult.from_record`), one case per setting, load level and seed::
+
+    from millscope.studies import Setting, StudyPlan, run_study
+    plan = StudyPlan.ladder("dt_fraction", [0.05, 0.1, 0.2, 0.3], seeds=(0, 1, 2))
+    result = run_study(plan, "out/dt-study/store")
+    result.to_csv("out/dt-study/accuracy.csv"); print(result.to_markdown())
+    result.pareto("energy")               # the settings no other beats in both cost and error
+
+**Comparing unlike settings.** Quantities are put on the reference's footing before they are
+compared: torques (mean, LTH amplitude) are scaled by the ratio of drum lengths L_ref / L (a
+periodic slice stands for its share of the mill's length), and energies by
+(L_ref / L) x (T_ref / T), T the block length: the energy of eq. (11) grows in proportion to
+the block length for a stationary signal, and in proportion to the drum length for torque
+noise from independent impacts along the axis (the aliased impact noise that dominates
+instantaneous samples). Per-unit energies and the slope a need no scaling.
+
+**Cost.** ``wall_s`` is the wall-clock time of one run (engine set-up, filling, settling, the
+warm-up and the block; the mean over the seeds), ``particle_steps`` the particles x the time
+steps of that run, settling included. With several load levels a setting's cost is the sum over
+its levels (one run per level, as a campaign needs).
+
+Units: s, m, N m, (N m)^2 s; errors and spreads are dimensionless fractions of the reference's
+seed mean.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from .. import _checks
+from ..signal.analysis import AnalysisSettings
+from .cases import CaseResult
+from .runs import Campaign
+from .study_plans import KNOBS, QUANTITIES, Setting, StudyPlan
+from .study_results import QuantityError, SettingSummary, StudyResult, StudyRow, StudyRun
+
+__all__ = [
+    "KNOBS",
+    "QUANTITIES",
+    "QuantityError",
+    "Setting",
+    "SettingSummary",
+    "StudyPlan",
+    "StudyResult",
+    "StudyRow",
+    "StudyRun",
+    "run_study",
+]
+
+
+# -- running -----------------------------------------------------------------------------------
+
+
+def _run_of(plan: StudyPlan, k: int, level: int, seed: int, result: CaseResult) -> StudyRun:
+    """A finished case analysed as the campaign does, with what it cost."""
+    setting = plan.settings[k]
+    case = result.case
+    analysis = AnalysisSettings((setting.warm_up_s, setting.duration_s), plan.bandwidth,
+                                plan.window)
+    assert result.record is not None  # done cases have a record
+    analysed = CaseResult.from_record(case, result.record, analysis,
+                                      wall_time_s=result.wall_time_s)
+    # The kept samples are stamped warm-up + sample_dt .. duration (the end of their
+    # intervals), so the campaign's block [warm-up, duration) holds one sample fewer than
+    # the record: energies are compared per the block length actually analysed.
+    block_s = result.record.block(*analysis.block).duration_s
+    dt = result.record.meta["dt"]
+    settle = result.record.meta.get("settle") or {}
+    steps = round(float(settle.get("time_s", 0.0)) / dt) + round(case.settings.duration_s / dt)
+    n = case.scene.n_particles
+    return StudyRun(setting=k, load_level=level, seed=seed, hash=result.hash,
+                    wall_s=float(result.wall_time_s), particle_steps=float(n * steps),
+                    n_particles=n, dt_s=float(dt), length_m=case.scene.drum.length,
+                    block_s=block_s, mean_torque=analysed.mean_torque,
+                    lth_amplitude=analysed.lth_amplitude, energy=analysed.energy)
+
+
+def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any = None,
+              max_workers: int | None = None, progress: bool = True) -> StudyResult:
+    """Runs a study's cases through a :class:`~millscope.campaign.Campaign` and tabulates them.
+
+    The cases go to the campaign from the most expensive to the cheapest (so that the
+    longest do not start last). The store keeps every finished case: a rerun of the same plan
+    (or of a plan sharing cases) runs only what is missing, and reports the wall times the
+    cases took when they ran.
+
+    Parameters
+    ----------
+    plan : StudyPlan
+    store : path
+        The campaign store (a directory; created if needed).
+    executor : optional
+        A ``concurrent.futures`` executor or a ``dask.distributed`` Client
+        (:meth:`Campaign.run`); None: a local process pool.
+    max_workers : int, optional
+        Processes of the local pool (only with ``executor=None``). Default 1: one case at a
+        time, so that the measured wall times do not disturb each other.
+    progress : bool
+        Show the campaign's progress bar.
+
+    Returns
+    -------
+    StudyResult
+
+    Raises
+    ------
+    ValueError
+        for a bad argument, before any work.
+    RuntimeError
+        when a case failed (the finished ones are kept in the store; a rerun retries).
+    """
+    if not isinstance(plan, StudyPlan):
+        raise _checks.fail("plan", plan, "a StudyPlan")
+    order = sorted(range(len(plan.cases())),
+                   key=lambda i: -plan.planned_particle_steps(plan.settings[plan._cases[i][0]]))
+    campaign = Campaign([plan._cases[i][3] for i in order], store, block=None)
+    if executor is None and max_workers is None:
+        max_workers = 1
+    results = campaign.run(executor=executor, max_workers=max_workers, progress=progress)
+    failed = [r for r in results if not r.ok]
+    if failed:
+        raise RuntimeError(f"{len(failed)} of {len(results)} runs failed, first "
+                           f"{failed[0].case.name}: {failed[0].error}; see "
+                           f"{campaign.store / 'manifest.json'} (a rerun retries them)")
+    by_hash = {r.hash: r for r in results}
+    runs = [_run_of(plan, k, level, seed, by_hash[case.hash()])
+            for k, level, seed, case in plan._cases]
+    return StudyResult.from_runs(plan, runs, store=campaign.store)

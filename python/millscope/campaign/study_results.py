@@ -1,0 +1,539 @@
+"""The results of a study of error against run time: one run (:class:`StudyRun`), the
+errors of a setting (:class:`StudyRow`, :class:`QuantityError`, :class:`SettingSummary`)
+and the study's table, CSV and Markdown (:class:`StudyResult`); see
+:mod:`millscope.campaign.studies`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import _checks
+from .._files import atomic_write
+from ..calibration.logfit import log_fit, per_unit
+from ..model.presets import pilot_mill
+from ..signal.record import TorqueRecord
+from .study_plans import COSTS, KNOBS, QUANTITIES, Setting, StudyPlan
+
+__all__ = ["QuantityError", "SettingSummary", "StudyResult", "StudyRow", "StudyRun"]
+
+
+# -- results -----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StudyRun:
+    """One run of a study (a campaign case): what it cost and what its block gives.
+
+    Attributes
+    ----------
+    setting : int
+        Index of the setting in the plan.
+    load_level : int
+        Table 5's level.
+    seed : int
+        Filling seed.
+    hash : str
+        The campaign case's hash: its record is ``<store>/cases/<hash>.npz``.
+    wall_s : float
+        Wall-clock time of the run (set-up, filling, settling, warm-up, block), s.
+    particle_steps : float
+        Particles x time steps of the run, settling included.
+    n_particles : int
+        Spheres in the charge.
+    dt_s : float
+        Time step, s.
+    length_m : float
+        Drum length, m.
+    block_s : float
+        Length of the analysed block, N samples x sample_dt, s.
+    mean_torque, lth_amplitude, energy : float
+        Of the block as the campaign analyses it: N m, N m, (N m)^2 s (not normalised).
+    """
+
+    setting: int
+    load_level: int
+    seed: int
+    hash: str
+    wall_s: float
+    particle_steps: float
+    n_particles: int
+    dt_s: float
+    length_m: float
+    block_s: float
+    mean_torque: float
+    lth_amplitude: float
+    energy: float
+
+    def value(self, quantity: str, length_m: float, block_s: float) -> float:
+        """``quantity`` of this run on the footing of a run of drum length ``length_m`` (m)
+        and block ``block_s`` (s): torques x L_ref / L, energies x (L_ref / L) (T_ref / T)."""
+        length = length_m / self.length_m
+        if quantity == "energy":
+            return self.energy * length * (block_s / self.block_s)
+        return float(getattr(self, quantity)) * length
+
+
+@dataclass(frozen=True)
+class QuantityError:
+    """One quantity of one row: its seed statistics and its error against the reference.
+
+    Attributes
+    ----------
+    mean : float
+        Mean over the seeds, on the reference's footing (see the module docstring); in the
+        quantity's unit (:data:`QUANTITIES`).
+    std : float
+        Standard deviation over the seeds (ddof 1), same unit.
+    error : float
+        (mean - reference mean) / |reference mean|: the relative error of the seed mean,
+        signed; 0 for the reference.
+    spread : float
+        std / |reference mean|: the relative scatter of one run.
+    error_se : float
+        Standard error of ``error`` from the seed noise of both means,
+        sqrt(std^2 / n + std_ref^2 / n_ref) / |reference mean|; 0 for the reference (which
+        is compared with itself).
+    """
+
+    mean: float
+    std: float
+    error: float
+    spread: float
+    error_se: float
+
+
+@dataclass(frozen=True)
+class StudyRow:
+    """One row of the table: a setting at one load level.
+
+    Attributes
+    ----------
+    setting : Setting
+    reference : bool
+        True for the reference setting's rows.
+    load_level : int
+    n_particles : int
+    dt_s : float
+        Time step, s.
+    shear_modulus_ratio : float
+        The shear modulus used / the paper's (the setting's factor, or the scale's own).
+    length_m : float
+        Drum length, m.
+    seeds : int
+        Runs (seeds) behind the statistics.
+    wall_s : float
+        Wall-clock time of one run, s (mean over the seeds).
+    particle_steps : float
+        Particles x time steps of one run, settling included (mean over the seeds).
+    quantities : mapping of str to QuantityError
+        ``"mean_torque"``, ``"energy"``, ``"lth_amplitude"`` and ``"slope_a"`` (the slope
+        is a property of the setting, the same on each of its levels; nan entries with one
+        load level).
+    """
+
+    setting: Setting
+    reference: bool
+    load_level: int
+    n_particles: int
+    dt_s: float
+    shear_modulus_ratio: float
+    length_m: float
+    seeds: int
+    wall_s: float
+    particle_steps: float
+    quantities: Mapping[str, QuantityError]
+
+    @property
+    def label(self) -> str:
+        return self.setting.label
+
+
+@dataclass(frozen=True)
+class SettingSummary:
+    """A setting as one point of the error-against-cost plane (all load levels together).
+
+    Attributes
+    ----------
+    setting : Setting
+    reference : bool
+    cost : float
+        Summed over the load levels: s of wall-clock time or particle-steps per seed.
+    error : float
+        The largest |error| over the load levels (dimensionless).
+    error_se : float
+        The standard error at that level.
+    spread : float
+        The seed spread at that level.
+    """
+
+    setting: Setting
+    reference: bool
+    cost: float
+    error: float
+    error_se: float
+    spread: float
+
+
+_NAN_ERROR = QuantityError(math.nan, math.nan, math.nan, math.nan, math.nan)
+
+
+def _statistics(values: Sequence[float], ref_values: Sequence[float],
+                is_reference: bool) -> QuantityError:
+    """Seed mean and spread of ``values`` and their error against ``ref_values``."""
+    v = np.asarray(values, dtype=np.float64)
+    r = np.asarray(ref_values, dtype=np.float64)
+    if v.size == 0 or not np.all(np.isfinite(v)) or not np.all(np.isfinite(r)):
+        return _NAN_ERROR
+    mean, ref_mean = float(v.mean()), float(r.mean())
+    std = float(v.std(ddof=1)) if v.size > 1 else math.nan
+    ref_std = float(r.std(ddof=1)) if r.size > 1 else math.nan
+    scale = abs(ref_mean)
+    if scale == 0.0:
+        return QuantityError(mean, std, math.nan, math.nan, math.nan)
+    if is_reference:
+        return QuantityError(mean, std, 0.0, std / scale, 0.0)
+    se = math.sqrt(std**2 / v.size + ref_std**2 / r.size) / scale
+    return QuantityError(mean, std, (mean - ref_mean) / scale, std / scale, se)
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """The table of a study, with its runs when it was run here (not when read from CSV).
+
+    Attributes
+    ----------
+    rows : tuple of StudyRow
+        By setting (plan order), then load level.
+    plan : StudyPlan or None
+        The plan (None when read from CSV).
+    runs : tuple of StudyRun
+        Every run (empty when read from CSV).
+    store : Path or None
+        The campaign store holding the runs' records.
+    description : str
+        The case studied, e.g. ``"balls-MS, 3 seeds, 0.71 of critical speed"``.
+    """
+
+    rows: tuple[StudyRow, ...]
+    plan: StudyPlan | None = None
+    runs: tuple[StudyRun, ...] = ()
+    store: Path | None = None
+    description: str = ""
+
+    @classmethod
+    def from_runs(cls, plan: StudyPlan, runs: Iterable[StudyRun], *,
+                  store: Path | None = None) -> StudyResult:
+        """The table of a plan's runs (one per setting, load level and seed).
+
+        Raises
+        ------
+        ValueError
+            when a run is missing.
+        """
+        run_list = tuple(runs)
+        by_key = {(r.setting, r.load_level, r.seed): r for r in run_list}
+        for k in range(len(plan.settings)):
+            for level in plan.load_levels:
+                for seed in plan.seeds:
+                    if (k, level, seed) not in by_key:
+                        raise ValueError(f"runs lack setting {k} ({plan.settings[k].label}) at "
+                                         f"load level {level}, seed {seed}")
+        ref = plan.reference_index
+        first_ref = by_key[(ref, plan.load_levels[0], plan.seeds[0])]
+        length_ref, block_ref = first_ref.length_m, first_ref.block_s
+
+        def values(k: int, level: int, quantity: str) -> list[float]:
+            return [by_key[(k, level, s)].value(quantity, length_ref, block_ref)
+                    for s in plan.seeds]
+
+        def slopes(k: int) -> list[float]:
+            if len(plan.load_levels) < 2:
+                return []
+            out = []
+            for s in plan.seeds:
+                energies = [by_key[(k, level, s)].energy for level in plan.load_levels]
+                out.append(log_fit(plan.load_levels, per_unit(energies)).a)
+            return out
+
+        ref_slopes = slopes(ref)
+        rows = []
+        for k, setting in enumerate(plan.settings):
+            slope = (_statistics(slopes(k), ref_slopes, k == ref)
+                     if ref_slopes else _NAN_ERROR)
+            for level in plan.load_levels:
+                group = [by_key[(k, level, s)] for s in plan.seeds]
+                stats = {q: _statistics(values(k, level, q), values(ref, level, q), k == ref)
+                         for q in ("mean_torque", "energy", "lth_amplitude")}
+                stats["slope_a"] = slope
+                first = group[0]
+                scene = plan.scene(setting, level)
+                paper = pilot_mill(plan.speed_fraction, plan.particles, level, "paper")
+                ratio = (scene.material(scene.drum.material).shear_modulus
+                         / paper.material(paper.drum.material).shear_modulus)
+                rows.append(StudyRow(
+                    setting=setting, reference=k == ref, load_level=level,
+                    n_particles=first.n_particles, dt_s=first.dt_s,
+                    shear_modulus_ratio=ratio, length_m=first.length_m, seeds=len(group),
+                    wall_s=float(np.mean([r.wall_s for r in group])),
+                    particle_steps=float(np.mean([r.particle_steps for r in group])),
+                    quantities=stats))
+        name = pilot_mill(plan.speed_fraction, plan.particles, plan.load_levels[0]).name
+        if len(plan.load_levels) > 1:
+            name = f"{name.split('#')[0]} #{', #'.join(str(v) for v in plan.load_levels)}"
+        return cls(tuple(rows), plan, run_list, store,
+                   f"{name}, {len(plan.seeds)} seeds, {plan.speed_fraction:g} of critical speed")
+
+    # -- queries -------------------------------------------------------------------------------
+    @property
+    def settings(self) -> tuple[Setting, ...]:
+        """The settings, in table order, each once."""
+        return tuple(dict.fromkeys(r.setting for r in self.rows))
+
+    @property
+    def reference(self) -> Setting:
+        """The reference setting."""
+        return next(r.setting for r in self.rows if r.reference)
+
+    def summary(self, quantity: str = "energy", cost: str = "wall_s") -> list[SettingSummary]:
+        """Every setting as a point (cost, |error|), in table order.
+
+        Parameters
+        ----------
+        quantity : str
+            One of :data:`QUANTITIES`.
+        cost : {"wall_s", "particle_steps"}
+            Summed over the load levels.
+
+        Returns
+        -------
+        list of SettingSummary
+            The error is the largest |error| over the setting's load levels (nan when the
+            quantity is not available, e.g. the slope with one level).
+        """
+        _checks.choice("quantity", quantity, tuple(QUANTITIES))
+        _checks.choice("cost", cost, COSTS)
+        out = []
+        for s in self.settings:
+            rows = [r for r in self.rows if r.setting == s]
+            total = float(sum(getattr(r, cost) for r in rows))
+            worst = max(rows, key=lambda r: (abs(r.quantities[quantity].error)
+                                             if math.isfinite(r.quantities[quantity].error)
+                                             else -1.0))
+            q = worst.quantities[quantity]
+            out.append(SettingSummary(s, worst.reference, total, abs(q.error), q.error_se,
+                                      q.spread))
+        return out
+
+    def pareto(self, quantity: str = "energy", cost: str = "wall_s") -> tuple[Setting, ...]:
+        """The settings on the Pareto front of cost against |error|, cheapest first.
+
+        A setting is on the front when no other setting costs no more and errs no more, and
+        is better in one of the two. Settings whose error is nan are left out.
+
+        Parameters
+        ----------
+        quantity : str
+            One of :data:`QUANTITIES`.
+        cost : {"wall_s", "particle_steps"}
+
+        Returns
+        -------
+        tuple of Setting
+        """
+        points = [p for p in self.summary(quantity, cost) if math.isfinite(p.error)]
+        points.sort(key=lambda p: (p.cost, p.error))
+        front: list[SettingSummary] = []
+        best = math.inf
+        for p in points:
+            if p.error < best:
+                front.append(p)
+                best = p.error
+            elif front and (p.cost, p.error) == (front[-1].cost, front[-1].error):
+                front.append(p)  # equal to a point of the front: not dominated
+        return tuple(p.setting for p in front)
+
+    def cheapest(self, quantity: str = "energy", within: float = 0.05, *,
+                 cost: str = "wall_s", with_se: bool = True) -> Setting | None:
+        """The cheapest setting whose error stays within ``within``.
+
+        Parameters
+        ----------
+        quantity : str
+            One of :data:`QUANTITIES`.
+        within : float
+            Largest acceptable |error| (a fraction, e.g. 0.05 for 5 %).
+        cost : {"wall_s", "particle_steps"}
+        with_se : bool
+            Require |error| + 2 standard errors <= ``within`` (the error is below the bound
+            with about 97.5 % confidence), not just |error| <= ``within``.
+
+        Returns
+        -------
+        Setting or None
+            None when none qualifies.
+        """
+        bound = _checks.positive("within", within)
+        ok = [p for p in self.summary(quantity, cost)
+              if math.isfinite(p.error)
+              and p.error + (2.0 * p.error_se if with_se else 0.0) <= bound]
+        return min(ok, key=lambda p: p.cost).setting if ok else None
+
+    def record(self, run: StudyRun) -> TorqueRecord:
+        """The stored torque record of a run (after the warm-up; N m against s)."""
+        if self.store is None:
+            raise ValueError("this result has no store (it was read from CSV)")
+        return TorqueRecord.load(self.store / "cases" / f"{run.hash}.npz")
+
+    # -- tables --------------------------------------------------------------------------------
+    def to_csv(self, path: str | os.PathLike[str] | None = None) -> str:
+        """The table as CSV, one line per row (setting and load level); written atomically to
+        ``path`` when given. Returns the text.
+
+        Columns: ``label``, ``reference`` (1/0), the knobs (:data:`KNOBS`;
+        ``shear_modulus_factor`` empty for the scale's own), ``load_level``,
+        ``n_particles``, ``dt_s``, ``shear_modulus_ratio``, ``length_m``, ``seeds``,
+        ``wall_s``, ``particle_steps``, then per quantity ``<q>``, ``<q>_std``,
+        ``<q>_error``, ``<q>_spread``, ``<q>_error_se`` (:class:`QuantityError`), and
+        ``description``. Floats are written exactly (``repr``).
+        """
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerow(_csv_columns())
+        for r in self.rows:
+            knobs = r.setting.to_dict()
+            line: list[Any] = [r.label, int(r.reference)]
+            line += ["" if knobs[k] is None else knobs[k] if isinstance(knobs[k], str)
+                     else _plain(knobs[k]) for k in KNOBS]
+            line += [r.load_level, r.n_particles, _plain(r.dt_s), _plain(r.shear_modulus_ratio),
+                     _plain(r.length_m), r.seeds, _plain(r.wall_s), _plain(r.particle_steps)]
+            for q in QUANTITIES:
+                e = r.quantities[q]
+                line += [_plain(e.mean), _plain(e.std), _plain(e.error), _plain(e.spread),
+                         _plain(e.error_se)]
+            line.append(self.description)
+            writer.writerow(line)
+        text = buffer.getvalue()
+        if path is not None:
+            with atomic_write(path, "w") as fh:
+                fh.write(text)
+        return text
+
+    @classmethod
+    def from_csv(cls, path: str | os.PathLike[str]) -> StudyResult:
+        """A table written by :meth:`to_csv` (without plan, runs or store).
+
+        Raises
+        ------
+        ValueError
+            naming the file, for a missing column or a value that does not parse.
+        """
+        source = Path(path)
+        try:
+            text = source.read_text()
+        except FileNotFoundError:
+            raise ValueError(f"{source}: no such study table") from None
+        reader = csv.DictReader(io.StringIO(text))
+        missing = [c for c in _csv_columns() if c not in (reader.fieldnames or [])]
+        if missing:
+            raise ValueError(f"{source}: not a millscope study table; missing columns "
+                             f"{missing}")
+        rows, description = [], ""
+        for n, line in enumerate(reader, start=2):
+            try:
+                knobs: dict[str, Any] = {k: line[k] for k in KNOBS}
+                for k in ("dt_fraction", "record_s", "warm_up_s"):
+                    knobs[k] = float(knobs[k])
+                g = knobs["shear_modulus_factor"]
+                knobs["shear_modulus_factor"] = None if g == "" else float(g)
+                quantities = {q: QuantityError(*(float(line[c]) for c in _quantity_columns(q)))
+                              for q in QUANTITIES}
+                rows.append(StudyRow(
+                    setting=Setting(**knobs), reference=line["reference"] == "1",
+                    load_level=int(line["load_level"]), n_particles=int(line["n_particles"]),
+                    dt_s=float(line["dt_s"]),
+                    shear_modulus_ratio=float(line["shear_modulus_ratio"]),
+                    length_m=float(line["length_m"]), seeds=int(line["seeds"]),
+                    wall_s=float(line["wall_s"]), particle_steps=float(line["particle_steps"]),
+                    quantities=quantities))
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"{source}, line {n}: {exc}") from None
+            description = line["description"]
+        if sum(r.reference for r in rows) == 0:
+            raise ValueError(f"{source}: no row is marked as the reference")
+        return cls(tuple(rows), description=description)
+
+    def to_markdown(self, pareto_quantity: str = "energy") -> str:
+        """The table in Markdown: per row the setting, its cost, and per quantity the error of
+        the seed mean with the seed spread of one run, ``+3.1 % ± 2.0 %``; the reference row
+        gives its seed means instead. Settings on the Pareto front of ``pareto_quantity``
+        (cost: wall time) are marked with a ◆.
+        """
+        front = set(self.pareto(pareto_quantity))
+        shown = [q for q in QUANTITIES
+                 if any(math.isfinite(r.quantities[q].error) for r in self.rows)]
+        multi = len({r.load_level for r in self.rows}) > 1
+        names = {"mean_torque": "mean torque", "energy": "energy",
+                 "lth_amplitude": "LTH amplitude", "slope_a": "slope a"}
+        head = ["setting", *(["level"] if multi else []), "dt (s)", "G / paper's",
+                "wall s / run", "particle-steps / run", *(names[q] for q in shown)]
+        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        ref_row = next(r for r in self.rows if r.reference)
+        for r in self.rows:
+            mark = " ◆" if r.setting in front else ""
+            label = f"**{r.label}** (reference){mark}" if r.reference else f"{r.label}{mark}"
+            cells = [label, *([str(r.load_level)] if multi else []), f"{r.dt_s:.3g}",
+                     f"{r.shear_modulus_ratio:g}", f"{r.wall_s:.3g}", f"{r.particle_steps:.3g}"]
+            for q in shown:
+                e = r.quantities[q]
+                if r.reference:
+                    cells.append(f"{e.mean:.4g} ± {100 * e.spread:.1f} %")
+                elif math.isfinite(e.error):
+                    cells.append(f"{100 * e.error:+.1f} % ± {100 * e.spread:.1f} %")
+                else:
+                    cells.append("-")
+            lines.append("| " + " | ".join(cells) + " |")
+        units = ", ".join(f"{names[q]} in {QUANTITIES[q]}" for q in shown if QUANTITIES[q])
+        notes = [
+            f"Study of {self.description or 'the pilot mill'}; reference: {ref_row.label}.",
+            "",
+            *lines,
+            "",
+            "Each cell: the relative error of the seed mean against the reference's seed mean, "
+            "± the seed-to-seed spread of one run (standard deviation over the seeds), both "
+            "in % of the reference; the reference row gives its seed means "
+            f"({units}) ± its spread. An error within about 2 x spread x sqrt(2 / seeds) "
+            "is not told apart from noise (the CSV gives each error's standard error). "
+            "Torques are compared per length of drum and energies per length of drum and of "
+            "block (see millscope.studies). Wall time: one run (engine set-up, filling, "
+            "settling, warm-up and block) on the plan's engine threads. ◆: on the Pareto front "
+            f"of wall time against the {names[pareto_quantity]} error.",
+        ]
+        return "\n".join(notes) + "\n"
+
+
+def _plain(value: float) -> str:
+    """A float as CSV text that reads back exactly."""
+    return repr(float(value))
+
+
+def _quantity_columns(quantity: str) -> tuple[str, ...]:
+    return (quantity, f"{quantity}_std", f"{quantity}_error", f"{quantity}_spread",
+            f"{quantity}_error_se")
+
+
+def _csv_columns() -> list[str]:
+    columns = ["label", "reference", *KNOBS, "load_level", "n_particles", "dt_s",
+               "shear_modulus_ratio", "length_m", "seeds", "wall_s", "particle_steps"]
+    for q in QUANTITIES:
+        columns += _quantity_columns(q)
+    return [*columns, "description"]
