@@ -95,3 +95,19 @@ def test_absurd_step_counts_are_refused_before_any_work(make, call, name) -> Non
     with pytest.raises(ValueError, match=rf"^{name} = .* steps; one call may take at most"):
         call(sim)
     assert sim.phase == "empty" and sim.positions.shape == (40, 3)
+
+
+def test_a_process_that_ignores_ctrl_c_keeps_ignoring_it_during_a_run() -> None:
+    """A campaign's pool worker ignores SIGINT (its campaign handles Ctrl-C): a run in it must
+    not turn SIGINT back on and end its case as interrupted."""
+    sim = small_sim()
+    sim.settle(progress=False)
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    timer = threading.Timer(0.05, signal.raise_signal, (signal.SIGINT,))
+    try:
+        timer.start()
+        rec = sim.run(3.0, progress=False)
+        timer.join()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert rec.meta["interrupted"] is False and len(rec) == 300

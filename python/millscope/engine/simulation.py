@@ -720,12 +720,16 @@ def _progress(enabled: bool, total: float, desc: str, unit: str) -> Iterator[Any
 
 @contextmanager
 def _interrupt_flag() -> Iterator[threading.Event]:
-    """Turns Ctrl-C into a flag checked between chunks (main thread only)."""
+    """Turns Ctrl-C into a flag checked between chunks (main thread only). A process that
+    ignores SIGINT (a campaign's pool worker, whose campaign handles Ctrl-C) keeps ignoring it."""
     stop = threading.Event()
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return
     previous = signal.getsignal(signal.SIGINT)
+    if previous is signal.SIG_IGN:
+        yield stop
+        return
 
     def handler(_signum: int, _frame: Any) -> None:
         stop.set()
