@@ -298,7 +298,9 @@ def cmd_advise(args: argparse.Namespace) -> int:
 
 
 def add_torque_file_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of :meth:`millscope.TorqueRecord.from_csv` for a torque text file."""
+    """The torque file argument and the options of :meth:`millscope.TorqueRecord.from_csv`."""
+    p.add_argument("file", help="torque record: a CSV or text export (columns, units, separator "
+                   "and decimal mark sniffed, or given by the options below) or a .npz record")
     g = p.add_argument_group("torque text file", "how to read a CSV or text torque file "
                              "(plant exports); what is not given is sniffed from the file")
     g.add_argument("--time-column", type=_column, help="time column: header name or index from 0")
@@ -350,8 +352,6 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("analyze", help="analyse a torque record (CSV or npz)",
                        description="Mean torque, lifter torque harmonic and spectral energy of a "
                                    "torque record; writes spectrum and filtered-signal plots.")
-    p.add_argument("file", help="torque record: a CSV or text export (columns, units, separator "
-                   "and decimal mark sniffed, or given by the options below) or a .npz record")
     p.add_argument("--lifters", type=_positive_int, required=True, help="number of lifters")
     p.add_argument("--rotation-hz", type=_positive_float, required=True,
                    help="mill rotation frequency, Hz")
@@ -378,8 +378,6 @@ def build_parser() -> argparse.ArgumentParser:
                                    "torque record and prints one line per window: start and "
                                    "end (s), estimated load level, its interval, and 'outside' "
                                    "when the level lies outside the calibrated range.")
-    p.add_argument("file", help="torque record: a CSV or text export (columns, units, separator "
-                   "and decimal mark sniffed, or given by the options below) or a .npz record")
     p.add_argument("--calibration", required=True,
                    help="calibration JSON (Calibration.save, or report's calibration_*.json)")
     p.add_argument("--drive", help="drive.json describing motor and gears: their lines are removed")
