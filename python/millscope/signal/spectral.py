@@ -114,6 +114,18 @@ def _normalised(x: NDArray[np.float64]) -> tuple[NDArray[np.float64], _Scale]:
     return np.ldexp(x, -k), _Scale(k, peak)
 
 
+def _block(data: Samples, window: str, sample_rate_hz: float | None,
+           resolution_hz: float | None = None
+           ) -> tuple[NDArray[np.float64], float, NDArray[np.float64], _Scale]:
+    """What every analysis of a block starts with: the window and the samples checked (and the
+    resolution, when asked), then (samples, fs, the samples scaled by 2**-k, the scale)."""
+    _check_window(window)
+    x, fs = _samples(data, sample_rate_hz)
+    _check_resolution(x.size, fs, resolution_hz)
+    unit, scale = _normalised(x)
+    return x, fs, unit, scale
+
+
 def _check_window(window: str) -> None:
     if window not in _WINDOWS:
         raise ValueError(f"window = {window!r} is not known; use one of {', '.join(_WINDOWS)}")
@@ -177,10 +189,7 @@ def spectrum(data: Samples, *, window: WindowName = "hann", sample_rate_hz: floa
     resolution_hz : float, optional
         If given, refuse a block too short to resolve it (eq. 9).
     """
-    _check_window(window)
-    x, fs = _samples(data, sample_rate_hz)
-    _check_resolution(x.size, fs, resolution_hz)
-    unit, scale = _normalised(x)
+    x, fs, unit, scale = _block(data, window, sample_rate_hz, resolution_hz)
     amplitude, power, psd = _core.spectra(unit, fs, window)
     return Spectrum(
         freq=_core.bin_frequencies(x.size, fs),
@@ -295,11 +304,9 @@ def find_peak(data: Samples, near_hz: float, *, search_hz: float | None = None,
     search_hz : float, optional
         Half-width of the search window, Hz (>= 0); default 3 bins (3/TR).
     """
-    _check_window(window)
-    x, fs = _samples(data, sample_rate_hz)
+    x, fs, unit, scale = _block(data, window, sample_rate_hz)
     if search_hz is None:
         search_hz = 3.0 * fs / x.size
-    unit, scale = _normalised(x)
     p = _core.find_peak(unit, fs, window, float(near_hz), float(search_hz))
     amplitude = float(scale.back(np.array(p.amplitude), 1, "peak amplitude"))
     noise = float(scale.back(np.array(p.noise_amplitude), 1, "noise amplitude"))
@@ -393,10 +400,7 @@ def spectral_energy(data: Samples, remove: Sequence[RemoveItem] = ("mean",), *,
     resolution_hz : float, optional
         If given, refuse a block too short to resolve it (eq. 9).
     """
-    _check_window(window)
-    x, fs = _samples(data, sample_rate_hz)
-    _check_resolution(x.size, fs, resolution_hz)
-    unit, scale = _normalised(x)
+    x, fs, unit, scale = _block(data, window, sample_rate_hz, resolution_hz)
     mask = _mask(unit, fs, window, remove, bandwidth, band, track_hz)
     h = mask.half_width_hz
     estimate = _core.spectral_energy(unit, fs, window, mask)
@@ -422,9 +426,7 @@ def band_stop(data: TorqueRecord, remove: Sequence[RemoveItem] = ("mean",), *,
     :func:`spectral_energy` with the same arguments. With ``window="rectangular"`` it is the
     plain band-stopped signal; with a Hann window it carries the window's taper.
     """
-    _check_window(window)
-    x, fs = _samples(data, None)
-    unit, scale = _normalised(x)
+    _, fs, unit, scale = _block(data, window, None)
     mask = _mask(unit, fs, window, remove, bandwidth, band, track_hz)
     y = scale.back(_core.band_stop(unit, window, mask), 1, "filtered signal")
     return TorqueRecord(data.time_s, y, {**data.meta, "filtered": {
