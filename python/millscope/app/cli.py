@@ -271,6 +271,20 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_run(args: argparse.Namespace) -> int:
+    """One case described in a TOML file (millscope.app.case_files)."""
+    from .case_files import run_case_file
+
+    return run_case_file(args)
+
+
+def cmd_campaign(args: argparse.Namespace) -> int:
+    """A campaign described in a TOML file (millscope.app.case_files)."""
+    from .case_files import run_campaign_file
+
+    return run_campaign_file(args)
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     """Engine throughput on the pilot mill (millscope.bench)."""
     from .bench import run_from_args
@@ -439,6 +453,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=_positive_int, default=None,
                    help="parallel cases (default: cores / threads)")
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser("run", help="run one case described in a TOML file",
+                       description="Reads a case file ([scene]: a preset such as pilot_mill "
+                                   "or an explicit scene; [settings]: seed, duration, warm-up, "
+                                   "sampling, time step, threads; [output]: the torque record "
+                                   ".npz or .csv, a checkpoint, an analysis, a spectrum figure), "
+                                   "checks all of it, then fills, settles and runs the mill "
+                                   "and writes the outputs. See examples/*.toml.")
+    p.add_argument("file", help="case file (TOML)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("campaign", help="run or resume a campaign described in a TOML file",
+                       description="Reads a campaign file ([campaign]: store, block, seeds; "
+                                   "[matrix] and/or [[scenes]]; [settings]; [executor]), checks "
+                                   "all of it, runs the cases not yet in the store (a rerun "
+                                   "resumes) and prints one line per case. Exit code 1 when "
+                                   "cases failed. See examples/*.toml.")
+    p.add_argument("file", help="campaign file (TOML)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_campaign)
 
     p = sub.add_parser("advise", help="stiffness advice: contact times against dt and the "
                                       "torque sampling",
