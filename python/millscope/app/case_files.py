@@ -70,7 +70,7 @@ from ..model.stiffness import time_step_limit
 from ..signal.analysis import analyze_block
 from ..signal.record import TorqueRecord
 from ..signal.spectral import spectral_energy
-from .cli import EXIT_INTERRUPTED, _resumable
+from .cli import EXIT_INTERRUPTED, CliError, _resumable
 
 __all__ = ["CaseFileError", "CampaignPlan", "RunPlan", "load_campaign", "load_run",
            "run_campaign_file", "run_case_file"]
@@ -420,12 +420,11 @@ def run_campaign_file(args: argparse.Namespace) -> int:
     if results is None:
         return EXIT_INTERRUPTED
     print(_table_of(results))
-    failed = [r for r in results if r.status == "failed"]
-    if failed:
-        print(f"millscope: {len(failed)} of {len(results)} cases failed (first: "
-              f"{failed[0].case.name}: {failed[0].error}); a rerun retries them",
-              file=sys.stderr)
-        return 1
+    failed = [r for r in results if not r.ok]
+    if failed:  # as millscope demo reports them: one error line, exit code 2
+        raise CliError(f"{len(failed)} of {len(results)} cases failed, first "
+                       f"{failed[0].case.name}: {failed[0].error}; see "
+                       f"{camp.store / 'manifest.json'}; a rerun retries them")
     return 0
 
 

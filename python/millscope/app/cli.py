@@ -469,8 +469,8 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Reads a campaign file ([campaign]: store, block, seeds; "
                                    "[matrix] and/or [[scenes]]; [settings]; [executor]), checks "
                                    "all of it, runs the cases not yet in the store (a rerun "
-                                   "resumes) and prints one line per case. Exit code 1 when "
-                                   "cases failed. See examples/*.toml.")
+                                   "resumes) and prints one line per case; failed cases end "
+                                   "with one error line and exit code 2. See examples/*.toml.")
     p.add_argument("file", help="campaign file (TOML)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_campaign)
