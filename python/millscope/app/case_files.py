@@ -70,10 +70,9 @@ from ..model.stiffness import time_step_limit
 from ..signal.analysis import analyze_block
 from ..signal.record import TorqueRecord
 from ..signal.spectral import spectral_energy
-from .cli import EXIT_INTERRUPTED, CliError, _resumable
 
-__all__ = ["CaseFileError", "CampaignPlan", "RunPlan", "load_campaign", "load_run",
-           "run_campaign_file", "run_case_file"]
+__all__ = ["CampaignPlan", "CaseFileError", "RunPlan", "load_campaign", "load_run",
+           "run_campaign", "run_case_file"]
 
 #: The presets a case file names with ``preset = "..."``; their keyword arguments are the
 #: table's other keys.
@@ -135,7 +134,7 @@ def _scene(table: object, where: str) -> Scene:
     if not isinstance(table, Mapping):
         raise CaseFileError(f"{where}: the scene must be a table, not {_kind(table)}")
     if "preset" not in table:
-        with _api(f"{where}"):
+        with _api(where):
             return Scene.from_dict({"format": SCENE_FORMAT, **table})
     with _api(where):
         name = _checks.choice("preset", table["preset"], tuple(PRESETS))
@@ -178,7 +177,8 @@ def _output_path(table: Mapping[str, Any], key: str, where: str,
         text = _checks.text(key, table[key])
     path = Path(text)
     if suffixes and path.suffix.lower() not in suffixes:
-        raise CaseFileError(f"{where} {_checks.fail(key, text, 'a path ending in ' + ' or '.join(suffixes))}")
+        valid = "a path ending in " + " or ".join(suffixes)
+        raise CaseFileError(f"{where} {_checks.fail(key, text, valid)}")
     if path.is_dir():
         raise CaseFileError(f"{where} {_checks.fail(key, text, 'a file path, not a folder')}")
     # the folder is created when the file is written; here its nearest existing ancestor
@@ -266,15 +266,18 @@ def load_run(path: str | os.PathLike[str]) -> RunPlan:
 def _check_analysable(case: Case, where: str) -> None:
     """The analysis's lifter harmonic must lie below the Nyquist frequency of the record."""
     lifters = case.scene.drum.lifters
-    s = case.settings
-    if lifters is not None and lifters.count * case.scene.rotation_hz >= 0.5 / s.sample_dt:
-        lth = lifters.count * case.scene.rotation_hz
-        raise CaseFileError(
-            f"{where} analysis: {_checks.fail('RunSettings.sample_dt', s.sample_dt, f'< {0.5 / lth:.6g} s so that the LTH at {lth:.4g} Hz lies below the Nyquist frequency', 's')}")
+    sample_dt = case.settings.sample_dt
+    lth = 0.0 if lifters is None else lifters.count * case.scene.rotation_hz
+    if lth >= 0.5 / sample_dt:
+        valid = f"< {0.5 / lth:.6g} s so that the LTH at {lth:.4g} Hz lies below the Nyquist " \
+                "frequency, for the analysis"
+        problem = _checks.fail("RunSettings.sample_dt", sample_dt, valid, "s")
+        raise CaseFileError(f"{where} {problem}")
 
 
-def run_case_file(args: argparse.Namespace) -> int:
-    """``millscope run FILE``: run one case file and write its outputs."""
+def run_case_file(args: argparse.Namespace) -> int | None:
+    """``millscope run FILE``: run one case file and write its outputs; 0, or None when
+    interrupted (Ctrl-C; nothing is written)."""
     plan = load_run(args.file)
     case, s = plan.case, plan.case.settings
     print(case.scene.describe())
@@ -294,7 +297,7 @@ def run_case_file(args: argparse.Namespace) -> int:
         print(f"millscope: warning: {w.message}", file=sys.stderr)
     if sim is None or full.meta.get("interrupted"):
         print("millscope: interrupted; nothing written", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return None
     meta = dict(full.meta)
     meta["settle"] = None if sim.settle_report is None else \
         dataclasses.asdict(sim.settle_report)
@@ -352,7 +355,7 @@ class CampaignPlan:
     """A campaign file, read and checked: the Campaign and how to run it."""
 
     campaign: Campaign
-    max_workers: object
+    max_workers: Any  # as read; Campaign.run checks it
     retry_failed: bool
     executor_table: str  # "<file>: [executor]", for the messages of Campaign.run's checks
 
@@ -372,8 +375,8 @@ def load_campaign(path: str | os.PathLike[str]) -> CampaignPlan:
                             "paper_cases) or [[scenes]] tables, or both")
     scenes: list[Scene] = []
     if "matrix" in data:
-        options = tuple(inspect.signature(paper_cases).parameters)
-        matrix = _table(data, "matrix", str(path), options)
+        arguments = tuple(inspect.signature(paper_cases).parameters)
+        matrix = _table(data, "matrix", str(path), arguments)
         with _api(f"{path}: [matrix]"):
             scenes += paper_cases(**matrix)
     listed = data.get("scenes", [])
@@ -401,30 +404,33 @@ def load_campaign(path: str | os.PathLike[str]) -> CampaignPlan:
     return CampaignPlan(campaign, executor.get("max_workers"), retry, f"{path}: [executor]")
 
 
-def run_campaign_file(args: argparse.Namespace) -> int:
-    """``millscope campaign FILE``: run (or resume) a campaign file and print its results."""
-    plan = load_campaign(args.file)
+def run_campaign(plan: CampaignPlan, *, progress: bool = True) -> int:
+    """``millscope campaign FILE``: run (or resume) a checked campaign file and print one line
+    per case; 0 when every case is done.
+
+    Raises
+    ------
+    RuntimeError
+        naming the failed cases (they are kept in the store and a rerun retries them), or
+        when another campaign holds the store.
+    KeyboardInterrupt
+        on Ctrl-C, as :meth:`Campaign.run`.
+    """
     camp = plan.campaign
     before = sum(1 for r in camp.results() if r.ok)
     print(f"millscope campaign: {len(camp)} cases, {before} already done in {camp.store}",
           flush=True)
-
-    def run() -> list[CaseResult]:
-        # Campaign.run checks max_workers (and the threads against the cores) before any
-        # work, raising ValueError: reported with the [executor] table
-        with _api(plan.executor_table):
-            return camp.run(max_workers=plan.max_workers,  # type: ignore[arg-type]
-                            progress=not args.no_progress, retry_failed=plan.retry_failed)
-
-    results = _resumable(run, camp.store, "cases")
-    if results is None:
-        return EXIT_INTERRUPTED
+    # Campaign.run checks max_workers (and the threads against the cores) before any work,
+    # raising ValueError: reported with the [executor] table
+    with _api(plan.executor_table):
+        results = camp.run(max_workers=plan.max_workers,
+                           progress=progress, retry_failed=plan.retry_failed)
     print(_table_of(results))
     failed = [r for r in results if not r.ok]
     if failed:  # as millscope demo reports them: one error line, exit code 2
-        raise CliError(f"{len(failed)} of {len(results)} cases failed, first "
-                       f"{failed[0].case.name}: {failed[0].error}; see "
-                       f"{camp.store / 'manifest.json'}; a rerun retries them")
+        raise RuntimeError(f"{len(failed)} of {len(results)} cases failed, first "
+                           f"{failed[0].case.name}: {failed[0].error}; see "
+                           f"{camp.store / 'manifest.json'}; a rerun retries them")
     return 0
 
 

@@ -275,14 +275,18 @@ def cmd_run(args: argparse.Namespace) -> int:
     """One case described in a TOML file (millscope.app.case_files)."""
     from .case_files import run_case_file
 
-    return run_case_file(args)
+    code = run_case_file(args)
+    return EXIT_INTERRUPTED if code is None else code
 
 
 def cmd_campaign(args: argparse.Namespace) -> int:
     """A campaign described in a TOML file (millscope.app.case_files)."""
-    from .case_files import run_campaign_file
+    from .case_files import load_campaign, run_campaign
 
-    return run_campaign_file(args)
+    plan = load_campaign(args.file)
+    code = _resumable(lambda: run_campaign(plan, progress=not args.no_progress),
+                      plan.campaign.store, "cases")
+    return EXIT_INTERRUPTED if code is None else code
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
