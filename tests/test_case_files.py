@@ -44,6 +44,7 @@ settle_max_s = {SETTLE["settle_max_s"]}
 record = "out/tiny.csv"
 checkpoint = "out/tiny.ckpt"
 analysis = true
+spectrum = "out/tiny.png"
 """
 
 # 40 soft steel balls in a 0.3 m jar with 8 lifters: a case of well under a second
@@ -108,6 +109,7 @@ def test_run_writes_the_record_the_python_api_gives(tmp_path, monkeypatch, capsy
     restored = ms.Simulation.load(tmp_path / "out" / "tiny.ckpt")
     np.testing.assert_array_equal(restored.positions, sim.positions)
     assert restored.time == sim.time and abs(sim.time - 0.3) <= sim.dt
+    assert (tmp_path / "out" / "tiny.png").read_bytes().startswith(b"\x89PNG\r\n")
     # the analysis printout's mean torque is the kept record's mean
     assert f"mean torque            {np.mean(full.torque_Nm[kept]):.6g} N m" in out
 
@@ -187,6 +189,11 @@ BAD_RUNS = [
      "[output]: missing key 'record'"),
     (lambda: "scene = 3\n[output]\nrecord = 'a.npz'\n",
      "[scene]: the scene must be a table, not an integer"),
+    (lambda: edit(TINY, "dt_fraction = 0.2", "dt_fraction = 0.2\ndt = 1e-5"),
+     "[settings] dt = 1e-05 and dt_fraction = 0.2 are not valid together; give one of them "
+     "(neither: the engine's default step)"),
+    (lambda: edit(TINY, "tiny.png", "tiny.xyz"),
+     "[output] spectrum = 'out/tiny.xyz' is not valid; it must be a path ending in "),
 ]
 
 
@@ -202,8 +209,9 @@ def test_a_bad_case_file_is_one_line_and_exit_2_before_any_run(
     path = write(tmp_path, text)
     assert main(["run", str(path), "--no-progress"]) == 2
     captured = capsys.readouterr()
-    assert captured.err == f"millscope: error: {path}: {message}\n"
-    assert captured.out == "" and list(tmp_path.iterdir()) == [path]
+    assert captured.err.startswith(f"millscope: error: {path}: {message}")
+    assert captured.err.count("\n") == 1 and captured.out == ""
+    assert list(tmp_path.iterdir()) == [path]
 
 
 def test_an_explicit_scene_gets_the_scenes_messages(tmp_path, capsys) -> None:
@@ -220,10 +228,17 @@ def test_an_explicit_scene_gets_the_scenes_messages(tmp_path, capsys) -> None:
                               "(at line 1, column 7))"),
     (b"\xff\xfe[scene]\n", "not a UTF-8 text file (byte 0); a case file is TOML text"),
     (None, "no such case file"),
+    ("/dev/zero", "larger than 4194304 bytes; a case file is a small text file, at most "
+                  "4194304 bytes"),
+    ("folder", "cannot read the case file (Is a directory)"),
 ])
 def test_a_file_that_is_not_toml_is_one_line(tmp_path, capsys, content, message) -> None:
     path = tmp_path / "case.toml"
-    if content is not None:
+    if content == "/dev/zero":
+        path = Path(content)
+    elif content == "folder":
+        path.mkdir()
+    elif content is not None:
         path.write_bytes(content)
     assert main(["run", str(path)]) == 2
     assert capsys.readouterr().err == f"millscope: error: {path}: {message}\n"

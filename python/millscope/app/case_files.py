@@ -342,8 +342,14 @@ def _spectrum(case: Case, record: TorqueRecord, path: Path) -> Path:
 
     lifters = case.scene.drum.lifters
     lth = None if lifters is None else lifters.count * case.scene.rotation_hz
-    fig = plots.plot_spectrum(spectrum(record), lth_hz=lth,
-                              title=f"{case.scene.name or 'scene'}: torque spectrum")
+    spec = spectrum(record)
+    title = f"{case.scene.name or 'scene'}: torque spectrum"
+    try:
+        fig = plots.plot_spectrum(spec, lth_hz=lth, title=title)
+    except ValueError:  # a record so short that the LTH falls in the mean's bins, not drawn
+        print(f"millscope: warning: the LTH at {lth:.4g} Hz is not marked: the record is too "
+              "short to show it apart from the mean", file=sys.stderr)
+        fig = plots.plot_spectrum(spec, title=title)
     return plots.save_figure(fig, path)
 
 
