@@ -8,7 +8,7 @@ import json
 import os
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import IO, Any
 
@@ -92,12 +92,22 @@ def read_bytes(path: str | os.PathLike[str], what: str, error: type[ValueError] 
     return raw
 
 
-def _utf8(raw: bytes, source: Path, what: str, kind: str, error: type[ValueError]) -> str:
+def _parse_text(path: str | os.PathLike[str], what: str, error: type[ValueError],
+                max_bytes: int | None, kind: str, parse: Callable[[str], Any]) -> Any:
+    """``parse`` of the UTF-8 text of ``path``; every problem an ``error`` naming the file."""
+    source = Path(path)
+    raw = read_bytes(source, what, error, max_bytes)
     try:
-        return raw.decode("utf-8")
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise error(f"{source}: not a UTF-8 text file (byte {exc.start}); a {what} file is "
                     f"{kind} text") from None
+    try:
+        return parse(text)
+    except RecursionError:
+        raise error(f"{source}: {kind} nested too deeply to read; not a {what} file") from None
+    except ValueError as exc:  # a syntax error, or an integer of over 4300 digits
+        raise error(f"{source}: not valid {kind} ({exc})") from None
 
 
 def read_json(path: str | os.PathLike[str], what: str, error: type[ValueError] = ValueError,
@@ -115,14 +125,7 @@ def read_json(path: str | os.PathLike[str], what: str, error: type[ValueError] =
         Naming the file: as :func:`read_bytes`, or not UTF-8, not valid JSON, or nested too
         deeply to parse.
     """
-    source = Path(path)
-    text = _utf8(read_bytes(source, what, error, max_bytes), source, what, "JSON", error)
-    try:
-        return json.loads(text)
-    except RecursionError:
-        raise error(f"{source}: JSON nested too deeply to read; not a {what} file") from None
-    except ValueError as exc:  # JSONDecodeError, or an integer of over 4300 digits
-        raise error(f"{source}: not valid JSON ({exc})") from None
+    return _parse_text(path, what, error, max_bytes, "JSON", json.loads)
 
 
 def read_toml(path: str | os.PathLike[str], what: str, error: type[ValueError] = ValueError,
@@ -140,14 +143,8 @@ def read_toml(path: str | os.PathLike[str], what: str, error: type[ValueError] =
         Naming the file: as :func:`read_bytes`, or not UTF-8, or not valid TOML (with the line
         and column of the fault).
     """
-    source = Path(path)
-    text = _utf8(read_bytes(source, what, error, max_bytes), source, what, "TOML", error)
-    try:
-        return tomllib.loads(text)
-    except RecursionError:
-        raise error(f"{source}: TOML nested too deeply to read; not a {what} file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise error(f"{source}: not valid TOML ({exc})") from None
+    data: dict[str, Any] = _parse_text(path, what, error, max_bytes, "TOML", tomllib.loads)
+    return data
 
 
 def read_npy_header(fp: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
