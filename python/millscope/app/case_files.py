@@ -67,7 +67,7 @@ from ..campaign.study_plans import Setting
 from ..model.presets import axial_slice, paper_cases, pilot_mill
 from ..model.scene import SCENE_FORMAT, Scene
 from ..model.stiffness import time_step_limit
-from ..signal.analysis import analyze_block
+from ..signal.analysis import BlockAnalysis, analyze_block
 from ..signal.record import TorqueRecord
 from ..signal.spectral import spectral_energy
 
@@ -309,10 +309,11 @@ def run_case_file(args: argparse.Namespace) -> int | None:
     written = [_save(plan.record, record.save)]
     if plan.checkpoint is not None:
         written.append(_save(plan.checkpoint, sim.save))
+    result = _analysis(case, record) if plan.analysis or plan.spectrum else None
     if plan.analysis:
-        print(_analysis(case, record))
+        print(_summary(result, record))
     if plan.spectrum is not None:
-        written.append(_spectrum(case, record, plan.spectrum))
+        written.append(_spectrum(case, record, result, plan.spectrum))
     if plan.energy_ledger:
         for name, value in meta["energies"].items():
             print(f"{name:<22} {value:.6g} J")
@@ -326,29 +327,39 @@ def case_dt(case: Case) -> float:
     return case.settings.dt or time_step_limit(case.scene).default_dt()
 
 
-def _analysis(case: Case, record: TorqueRecord) -> str:
+def _analysis(case: Case, record: TorqueRecord) -> BlockAnalysis | None:
+    """The whole record's analysis (:func:`~millscope.analysis.analyze_block`); None
+    without lifters."""
     lifters = case.scene.drum.lifters
-    if lifters is not None:
-        return analyze_block(record, lifters=lifters.count,
-                             rotation_hz=case.scene.rotation_hz).summary()
+    if lifters is None:
+        return None
+    return analyze_block(record, lifters=lifters.count, rotation_hz=case.scene.rotation_hz)
+
+
+def _summary(result: BlockAnalysis | None, record: TorqueRecord) -> str:
+    if result is not None:
+        return result.summary()
     e = spectral_energy(record, ["mean"])
     return (f"mean torque            {record.mean_torque_Nm:.6g} N m\n"
             f"spectral energy        {e.energy:.6g} (N m)^2 s (mean removed; no lifters)")
 
 
-def _spectrum(case: Case, record: TorqueRecord, path: Path) -> Path:
+def _spectrum(case: Case, record: TorqueRecord, result: BlockAnalysis | None,
+              path: Path) -> Path:
+    """The spectrum figure with the located LTH marked (grey when it does not stand out of
+    the noise), as ``millscope analyze`` draws it."""
     from ..report import plots
     from ..signal.spectral import spectrum
 
-    lifters = case.scene.drum.lifters
-    lth = None if lifters is None else lifters.count * case.scene.rotation_hz
     spec = spectrum(record)
     title = f"{case.scene.name or 'scene'}: torque spectrum"
     try:
-        fig = plots.plot_spectrum(spec, lth_hz=lth, title=title)
-    except ValueError:  # a record so short that the LTH falls in the mean's bins, not drawn
-        print(f"millscope: warning: the LTH at {lth:.4g} Hz is not marked: the record is too "
-              "short to show it apart from the mean", file=sys.stderr)
+        fig = plots.plot_spectrum(
+            spec, title=title, lth_hz=None if result is None else result.lth.frequency_hz,
+            lth_distinct=result is None or result.lth.distinct)
+    except ValueError:  # a record so short that the LTH falls in the mean's bins
+        print("millscope: warning: the LTH is not marked: the record is too short to show it "
+              "apart from the mean", file=sys.stderr)
         fig = plots.plot_spectrum(spec, title=title)
     return plots.save_figure(fig, path)
 
