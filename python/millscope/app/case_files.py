@@ -31,7 +31,8 @@ A campaign file has ``[campaign]`` (``store``, and optionally ``block``, ``seeds
 ``bandwidth``, ``window``, ``retry_failed`` as :class:`~millscope.Campaign` takes them),
 the scenes as ``[matrix]`` (the arguments of :func:`millscope.presets.paper_cases`) and/or
 ``[[scenes]]`` (each one as ``[scene]`` above), ``[settings]`` as above (without
-``energy_ledger``) and ``[executor]`` (``kind = "local"``, ``workers``). A rerun on the same
+``energy_ledger``) and ``[executor]`` (``kind = "local"``, ``max_workers`` as
+:meth:`Campaign.run` takes it). A rerun on the same
 store resumes it, as :meth:`Campaign.run` does.
 
 Every value goes through the Python API's own checks (the preset functions, Scene.from_dict,
