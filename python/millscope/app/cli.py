@@ -13,6 +13,7 @@ Bad input ends with one line ``millscope: error: ...`` on stderr and exit code 2
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
@@ -249,6 +250,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from .demo import DemoPlan, run_demo, run_synthetic_demo
 
     if args.synthetic:
+        if args.format != "text":
+            raise CliError(f"--format {args.format} is not valid with --synthetic, which runs "
+                           "no campaign; it must be text")
         run_synthetic_demo(Path(args.out), progress=not args.no_progress)
         return 0
     given = {"scale": args.scale, "particles": args.particles, "speed_fraction": args.speed,
@@ -256,9 +260,12 @@ def cmd_demo(args: argparse.Namespace) -> int:
              "duration_s": args.duration, "warm_up_s": args.warm_up, "seed": args.seed,
              "threads": args.threads}
     plan = DemoPlan(**{k: v for k, v in given.items() if v is not None})  # else its defaults
-    result = _resumable(lambda: run_demo(Path(args.out), plan, progress=not args.no_progress,
-                                         max_workers=args.workers),
-                        Path(args.out) / "store", "cases")
+    # with a table on stdout, the demo's own messages go to stderr
+    with contextlib.redirect_stdout(sys.stdout if args.format == "text" else sys.stderr):
+        result = _resumable(lambda: run_demo(Path(args.out), plan,
+                                             progress=not args.no_progress,
+                                             max_workers=args.workers),
+                            Path(args.out) / "store", "cases")
     if result is None:
         return EXIT_INTERRUPTED
     if args.format == "text":
