@@ -132,7 +132,7 @@ def test_a_study_table_holds_its_rows_and_is_its_csv() -> None:
     # the CSV is that table: pandas reads it back value for value
     back = pd.read_csv(io.StringIO(result.to_csv()))
     back["reference"] = back["reference"].astype(bool)
-    pd.testing.assert_frame_equal(back, table, check_dtype=False)
+    pd.testing.assert_frame_equal(back, table, check_dtype=False, check_exact=True)
 
 
 @pytest.fixture(scope="module")
@@ -198,7 +198,8 @@ def test_analyze_prints_its_figures_as_a_table(csv_record, tmp_path, capsys, fmt
     assert expected.loc[0, "lines_hz"] == "" and back["lines_hz"].isna().sum() + (
         back["lines_hz"] == "").sum() == 1
     columns = [c for c in expected.columns if c != "lines_hz"]
-    pd.testing.assert_frame_equal(back[columns], expected[columns], check_dtype=False)
+    pd.testing.assert_frame_equal(back[columns], expected[columns], check_dtype=False,
+                                  check_exact=True)
 
 
 @pytest.mark.parametrize("fmt", ["csv", "json"])
@@ -208,7 +209,7 @@ def test_monitor_prints_its_windows_as_a_table(calibration, tmp_path, capsys, fm
     assert main(["monitor", str(csv), "--calibration", str(cal), "--format", fmt]) == 0
     back = _read(capsys.readouterr().out, fmt)
     expected = monitor_record(ms.TorqueRecord.from_csv(csv), calibration).to_frame()
-    pd.testing.assert_frame_equal(back, expected, check_dtype=False)
+    pd.testing.assert_frame_equal(back, expected, check_dtype=False, check_exact=True)
 
 
 @pytest.mark.parametrize("fmt", ["csv", "json"])
@@ -224,7 +225,7 @@ def test_report_prints_the_store_as_a_table(store, tmp_path, capsys, monkeypatch
     assert back["status"].tolist() == expected["status"].tolist()  # the failed cases too
     if fmt == "json":  # JSON has no nan: missing numbers are null, read back as None
         back = back.fillna(value=np.nan)
-    pd.testing.assert_frame_equal(back, expected, check_dtype=False)
+    pd.testing.assert_frame_equal(back, expected, check_dtype=False, check_exact=True)
 
 
 @pytest.mark.parametrize("command", [

@@ -5,12 +5,13 @@
 :mod:`~millscope.campaign.executors` (the worker side and the wait on any executor),
 :mod:`~millscope.campaign.runs` (:class:`Campaign`, which runs cases into a store, and
 :func:`read_store`, a store as one table), :mod:`~millscope.campaign.tables` (the results as a
-pandas DataFrame) and the
-study of error against run time: :mod:`~millscope.campaign.study_plans` (settings, plans),
+pandas DataFrame) and the study of error against run time:
+:mod:`~millscope.campaign.study_plans` (settings, plans),
 :mod:`~millscope.campaign.study_results` (rows, tables, CSV, Markdown) and
-:mod:`~millscope.campaign.studies` (:func:`run_study`, and every name of the study). Imports the engine, the model, the
-calibration and the signal layers. The public names of the first four are importable from
-here (``millscope.campaign.Campaign``), as from the former ``millscope.campaign`` module.
+:mod:`~millscope.campaign.studies` (:func:`run_study`, and every name of the study). Imports
+the engine, the model, the calibration and the signal layers. The public names of the first
+five are importable from here (``millscope.campaign.Campaign``), as from the former
+``millscope.campaign`` module.
 """
 
 from .cases import CASE_FORMAT, Case, CaseResult, RunSettings, case_matrix, paper_matrix
