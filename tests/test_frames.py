@@ -251,3 +251,39 @@ def test_the_synthetic_demo_refuses_a_table(tmp_path, capsys) -> None:
     assert capsys.readouterr().err == ("millscope: error: --format csv is not valid with "
                                        "--synthetic, which runs no campaign; it must be text\n")
     assert not (tmp_path / "out").exists()
+
+
+def test_study_and_demo_print_their_tables(monkeypatch, tmp_path, capsys) -> None:
+    """The commands' campaigns stubbed: what they print is the table of what they got."""
+    import types
+
+    import millscope.campaign.studies
+    import millscope.demo
+    import millscope.report.reports
+
+    plan = StudyPlan((Setting(record_s=1.0, warm_up_s=1.0), Setting(record_s=2.0)),
+                     seeds=(0, 1))
+    study = StudyResult.from_runs(plan, _fake_runs(plan, np.random.default_rng(2)))
+    monkeypatch.setattr(millscope.campaign.studies, "run_study", lambda *a, **k: study)
+    monkeypatch.setattr(millscope.report.reports, "write_study", lambda *a, **k: [])
+    assert main(["study", "accuracy", "--out", str(tmp_path), "--vary-record", "1",
+                 "--no-progress", "--format", "csv"]) == 0
+    printed = capsys.readouterr()
+    assert printed.err.startswith("millscope study accuracy: ")
+    back = pd.read_csv(io.StringIO(printed.out))
+    back["reference"] = back["reference"].astype(bool)
+    pd.testing.assert_frame_equal(back, study.to_frame(), check_dtype=False, check_exact=True)
+
+    results = case_results(LEVELS)
+
+    def run_demo(*args: object, **kwargs: object) -> types.SimpleNamespace:
+        print("millscope demo: DEM campaign ...")  # the demo's own message
+        return types.SimpleNamespace(results=results, wall_time_s=1.0, report="report.md")
+
+    monkeypatch.setattr(millscope.demo, "run_demo", run_demo)
+    assert main(["demo", "--out", str(tmp_path), "--format", "json"]) == 0
+    printed = capsys.readouterr()
+    assert printed.err == "millscope demo: DEM campaign ...\ncampaign 1 s; report report.md\n"
+    back = pd.DataFrame.from_records(json.loads(printed.out)).fillna(value=np.nan)
+    pd.testing.assert_frame_equal(back, CaseResults(results).to_frame(), check_dtype=False,
+                                  check_exact=True)
