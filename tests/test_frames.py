@@ -105,6 +105,15 @@ def test_a_store_reads_as_one_table_with_failed_and_damaged_cases(store, tmp_pat
     assert table["seed"].dtype == np.int64  # the manifest gave its seed
     assert (table["status"] == "failed").sum() == 2
 
+    # a case the manifest lists as pending (never run, no file) is a row too
+    manifest = json.loads((copy / "manifest.json").read_text())
+    manifest["cases"].append({"hash": "f" * 64, "name": "LDMS#9", "seed": 3,
+                              "status": "pending", "file": None})
+    (copy / "manifest.json").write_text(json.dumps(manifest))
+    pending = ms.read_store(copy).iloc[-1]
+    assert (pending["hash"], pending["scene"], pending["seed"], pending["status"]) == (
+        "f" * 64, "LDMS#9", 3, "pending")
+
 
 def test_a_study_table_holds_its_rows_and_is_its_csv() -> None:
     ref = Setting(scale="soft", record_s=2.0, warm_up_s=1.0)
