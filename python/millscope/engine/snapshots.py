@@ -134,7 +134,8 @@ class VtkSeries:
         (Path, Path)
             The particle file and the drum file.
         """
-        import meshio  # loaded when a file is written: it takes most of a second to import
+        # loaded when a file is written: it takes most of a second to import
+        import meshio  # type: ignore[import-untyped]
 
         particles = self.folder / f"particles_{snap.step:09d}.vtu"
         drum = self.folder / f"drum_{snap.step:09d}.vtu"
