@@ -213,6 +213,36 @@ def test_snapshots_come_every_n_samples_with_their_times(tmp_path) -> None:
     assert np.max(moved) <= sim._engine.max_speed * (0.01 + sim.dt)
 
 
+def test_a_run_continued_from_a_checkpoint_goes_on_with_its_series(tmp_path) -> None:
+    """The collections keep the snapshots up to the checkpoint's step and list those of the
+    continuation after them, as the uninterrupted run did; a new simulation, or collections
+    that cannot be read, start a new series."""
+    folder = tmp_path / "vtk"
+    sim = small_sim()
+    sim.run(0.1, progress=False, snapshot_every=3, snapshot_dir=folder)  # samples 3, 6, 9
+    sim.save(tmp_path / "case.ckpt")
+    sim.run(0.06, progress=False, snapshot_every=3, snapshot_dir=folder)  # 12, 15
+    whole = collection(folder / "particles.pvd")
+    assert len(whole) == 5
+    again = ms.Simulation.load(tmp_path / "case.ckpt")
+    again.run(0.06, progress=False, snapshot_every=3, snapshot_dir=folder)
+    assert collection(folder / "particles.pvd") == whole
+    assert [f for _, f in collection(folder / "drum.pvd")] == [
+        f.replace("particles", "drum") for _, f in whole]
+
+    fresh = small_sim()
+    fresh.run(0.05, progress=False, snapshot_every=3, snapshot_dir=folder)  # sample 3
+    assert collection(folder / "particles.pvd") == whole[:1]  # same seed: the same state
+
+    for damaged in ("<VTKFile type='Collection'><DataSet", "<a>" * 100_000, "\x00\xff"):
+        (folder / "particles.pvd").write_text(damaged)
+        other = small_sim()
+        other.run(0.02, progress=False)
+        other.write_vtk(folder)
+        assert collection(folder / "particles.pvd") == [(other.time, f"particles_"
+                                                         f"{other._engine.step_count:09d}.vtu")]
+
+
 @pytest.mark.parametrize("every", [0, -2, 1.5, True, "5"])
 def test_a_bad_snapshot_interval_is_refused_before_any_work(tmp_path, every) -> None:
     sim = small_sim()

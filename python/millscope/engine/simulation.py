@@ -311,7 +311,7 @@ class Simulation:
         path = check_folder(where, folder)
         key = path.resolve()
         if key not in self._series:
-            self._series[key] = VtkSeries(path)
+            self._series[key] = VtkSeries(path, up_to_step=int(self._engine.step_count))
         return self._series[key]
 
     def max_overlap_ratio(self) -> float:
@@ -396,7 +396,9 @@ class Simulation:
             further snapshots.
         snapshot_dir : path-like, optional
             The folder of the snapshots (made if missing, must be writable); given together with
-            ``snapshot_every``.
+            ``snapshot_every``. The series there goes on where this simulation's state is (a run
+            continued from a checkpoint keeps the earlier snapshots; a new simulation starts
+            afresh).
 
         Returns
         -------

@@ -14,7 +14,10 @@ as a time series ParaView opens directly:
   omega x r, m/s);
 * ``particles.pvd`` and ``drum.pvd``: the collections that list the files with their times
   (s since the start of rotation, 0 before it); a comment in each names the materials by
-  index.
+  index. A series made for a simulation at step S keeps what the collections already in the
+  folder list up to step S (so a run continued from a checkpoint goes on with its series) and
+  drops the rest (a new simulation starts a new series); collections that cannot be read are
+  replaced.
 
 ``<step>`` is the engine's step count, so the files of one simulation sort in time order. In
 ParaView open both ``.pvd`` files; show the particles with the Glyph filter (Sphere, scale array
@@ -24,7 +27,9 @@ files are written with meshio (binary, zlib-compressed VTK XML), each atomically
 
 from __future__ import annotations
 
+import math
 import os
+import re
 import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -103,6 +108,36 @@ def check_folder(where: str, value: object) -> Path:
     return folder
 
 
+#: The largest collection read back, bytes (a snapshot's entry takes about 100).
+_MAX_COLLECTION_BYTES = 16 * 1024 * 1024
+
+
+def _read_collection(path: Path, prefix: str) -> dict[int, float]:
+    """{step: time_s} of the ``<prefix>_<step>.vtu`` files a ``.pvd`` written here lists; {}
+    when it is missing, too large or not such a collection (it is then replaced). Entries of
+    other files or without a finite time are left out."""
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read(_MAX_COLLECTION_BYTES + 1)
+        if len(raw) > _MAX_COLLECTION_BYTES:
+            return {}
+        root = ET.fromstring(raw)
+    except (OSError, ET.ParseError, ValueError, RecursionError):
+        return {}
+    if root.tag != "VTKFile" or root.get("type") != "Collection":
+        return {}
+    found: dict[int, float] = {}
+    for entry in root.iter("DataSet"):
+        name = re.fullmatch(rf"{prefix}_(\d{{9,18}})\.vtu", entry.get("file", ""))
+        try:
+            time_s = float(entry.get("timestep", "nan"))
+        except ValueError:
+            continue
+        if name and math.isfinite(time_s):
+            found[int(name[1])] = time_s
+    return found
+
+
 def _xml_comment(text: str) -> str:
     """``text`` made safe inside an XML comment (no ``--``)."""
     return " " + text.replace("--", "- -") + " "
@@ -118,13 +153,25 @@ class VtkSeries:
         folder: the collections list the snapshots this object wrote, and replace any there.
     segments : int
         Facets of the shell and the end walls around the circumference, in [8, 100000].
+    up_to_step : int, optional
+        Keep the snapshots of steps up to this one that the collections in the folder list
+        (with both their files present); None: start a new series.
     """
 
-    def __init__(self, folder: str | os.PathLike[str], segments: int = DEFAULT_SEGMENTS) -> None:
+    def __init__(self, folder: str | os.PathLike[str], segments: int = DEFAULT_SEGMENTS, *,
+                 up_to_step: int | None = None) -> None:
         self.segments = _checks.integer("segments", segments, ValueError, low=8, high=100_000)
         self.folder = check_folder("folder", folder)
-        #: (time_s, particle file name, drum file name) of each snapshot written, in order.
+        #: (time_s, particle file name, drum file name) of each snapshot in the series, in order.
         self.entries: list[tuple[float, str, str]] = []
+        if up_to_step is not None:
+            listed = _read_collection(self.folder / "particles.pvd", "particles")
+            drums = _read_collection(self.folder / "drum.pvd", "drum")
+            for step, time_s in sorted(listed.items()):
+                names = (f"particles_{step:09d}.vtu", f"drum_{step:09d}.vtu")
+                if (step <= up_to_step and drums.get(step) == time_s
+                        and all((self.folder / n).is_file() for n in names)):
+                    self.entries.append((time_s, *names))
 
     def add(self, snap: ChargeSnapshot) -> tuple[Path, Path]:
         """Writes ``snap`` (its particle and drum files) and updates the collections.
