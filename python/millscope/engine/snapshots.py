@@ -116,6 +116,8 @@ def _read_collection(path: Path, prefix: str) -> dict[int, float]:
     """{step: time_s} of the ``<prefix>_<step>.vtu`` files a ``.pvd`` written here lists; {}
     when it is missing, too large or not such a collection (it is then replaced). Entries of
     other files or without a finite time are left out."""
+    if not path.is_file():  # missing, or a folder or a pipe (which would block the read)
+        return {}
     try:
         with open(path, "rb") as fh:
             raw = fh.read(_MAX_COLLECTION_BYTES + 1)
@@ -138,6 +140,11 @@ def _read_collection(path: Path, prefix: str) -> dict[int, float]:
     return found
 
 
+def _file_names(step: int) -> tuple[str, str]:
+    """The particle and drum file names of the snapshot at engine step ``step``."""
+    return f"particles_{step:09d}.vtu", f"drum_{step:09d}.vtu"
+
+
 def _xml_comment(text: str) -> str:
     """``text`` made safe inside an XML comment (no ``--``)."""
     return " " + text.replace("--", "- -") + " "
@@ -149,8 +156,9 @@ class VtkSeries:
     Parameters
     ----------
     folder : path-like
-        Made if missing; must be writable (else ``ValueError``). One simulation's series per
-        folder: the collections list the snapshots this object wrote, and replace any there.
+        Made if missing; must be writable (else ``ValueError``). The collections there are
+        rewritten with every snapshot: they list the snapshots kept (``up_to_step``) and
+        those this object wrote.
     segments : int
         Facets of the shell and the end walls around the circumference, in [8, 100000].
     up_to_step : int, optional
@@ -168,7 +176,7 @@ class VtkSeries:
             listed = _read_collection(self.folder / "particles.pvd", "particles")
             drums = _read_collection(self.folder / "drum.pvd", "drum")
             for step, time_s in sorted(listed.items()):
-                names = (f"particles_{step:09d}.vtu", f"drum_{step:09d}.vtu")
+                names = _file_names(step)
                 if (step <= up_to_step and drums.get(step) == time_s
                         and all((self.folder / n).is_file() for n in names)):
                     self.entries.append((time_s, *names))
@@ -184,8 +192,7 @@ class VtkSeries:
         # loaded when a file is written: it takes most of a second to import
         import meshio  # type: ignore[import-untyped]
 
-        particles = self.folder / f"particles_{snap.step:09d}.vtu"
-        drum = self.folder / f"drum_{snap.step:09d}.vtu"
+        particles, drum = (self.folder / name for name in _file_names(snap.step))
         n = len(snap.positions)
         cloud = meshio.Mesh(
             np.ascontiguousarray(snap.positions, dtype=np.float64),
