@@ -276,6 +276,10 @@ def test_a_folder_that_cannot_be_written_is_refused_before_any_work(tmp_path) ->
         sim.run(0.1, progress=False, snapshot_every=5, snapshot_dir="")
     with pytest.raises(ValueError, match=r"folder = .*taken.txt' is not valid"):
         sim.write_vtk(a_file)
+    with pytest.raises(RuntimeError, match="the drum is empty; call fill"):
+        sim.write_vtk(tmp_path)
+    with pytest.raises(RuntimeError, match="the drum is empty; call fill"):
+        plots.plot_charge(sim)
     assert sim.phase == "empty" and a_file.read_text() == "not a folder"
 
 

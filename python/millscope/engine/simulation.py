@@ -10,6 +10,7 @@ Life of a simulation::
     sim = Simulation(scene, seed=0)        # checks dt against the stability limit; runs nothing
     rec = sim.run(14.0)                    # fills, settles, starts the drum, records 14 s
     rec2 = sim.run(2.0)                    # continues (times go on from 14 s)
+    sim.run(1.0, snapshot_every=5, snapshot_dir="vtk")  # with VTK snapshots for ParaView
     sim.save("case.ckpt"); sim = Simulation.load("case.ckpt")
 
 * **Filling** (:meth:`Simulation.fill`): every fraction, largest first, goes onto a loose cubic
@@ -284,7 +285,11 @@ class Simulation:
         return {k: float(v) for k, v in out.items()}
 
     def snapshot(self) -> ChargeSnapshot:
-        """The particles' state now (copies) with the drum's angle and angular velocity."""
+        """The particles' state now (copies) with the drum's angle and angular velocity; once
+        the particles are placed (after :meth:`fill`, else ``RuntimeError``)."""
+        if self._phase == "empty":
+            raise RuntimeError("there is no charge to show yet: the drum is empty; call fill(), "
+                               "settle() or run() first")
         e = self._engine
         return ChargeSnapshot(
             scene=self._scene, time_s=self.time, step=int(e.step_count),
