@@ -28,8 +28,9 @@ def _new_file_mode() -> int:
 
 
 @contextlib.contextmanager
-def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
-    """Open a temporary file beside ``path``; on success rename it over ``path``.
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """A temporary file's path beside ``path``, for a writer that opens files by name (such as
+    meshio); on success the file is synced to disk and renamed over ``path``.
 
     On any error the temporary file is removed and ``path`` is left as it was, so a reader never
     sees a half-written file. The result has the mode an ordinary ``open()`` would give it (the
@@ -38,17 +39,28 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
     target = Path(path)
     permissions = target.stat().st_mode & 0o7777 if target.exists() else _new_file_mode()
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    os.chmod(tmp, permissions)
+    os.close(fd)
     try:
-        with os.fdopen(fd, mode) as fh:
-            yield fh
-            fh.flush()
-            os.fsync(fh.fileno())
+        os.chmod(tmp, permissions)
+        yield Path(tmp)
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
         os.replace(tmp, target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+@contextlib.contextmanager
+def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
+    """Open a temporary file beside ``path``; on success rename it over ``path``
+    (:func:`atomic_path`, with the file opened in ``mode``)."""
+    with atomic_path(path) as tmp, open(tmp, mode) as fh:
+        yield fh
 
 
 #: The largest JSON file :func:`read_json` reads, bytes. Calibrations, drives and scenes are a

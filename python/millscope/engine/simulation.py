@@ -10,6 +10,7 @@ Life of a simulation::
     sim = Simulation(scene, seed=0)        # checks dt against the stability limit; runs nothing
     rec = sim.run(14.0)                    # fills, settles, starts the drum, records 14 s
     rec2 = sim.run(2.0)                    # continues (times go on from 14 s)
+    sim.run(1.0, snapshot_every=5, snapshot_dir="vtk")  # with VTK snapshots for ParaView
     sim.save("case.ckpt"); sim = Simulation.load("case.ckpt")
 
 * **Filling** (:meth:`Simulation.fill`): every fraction, largest first, goes onto a loose cubic
@@ -49,12 +50,13 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import _core
+from .. import _checks, _core
 from .._files import atomic_write
 from ..model.scene import Scene
 from ..model.stiffness import time_step_limit, upper_impact_speed
 from ..signal.record import TorqueRecord
 from . import checkpoint as _checkpoint
+from .snapshots import ChargeSnapshot, VtkSeries, check_folder
 
 __all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation", "check_threads"]
 
@@ -188,6 +190,8 @@ class Simulation:
         self.settle_report: SettleReport | None = None
         #: Torque of the drum's parts over the last run, N m: "shell", "lifters", "ends".
         self.last_parts: dict[str, NDArray[np.float64]] = {}
+        #: The VTK series written into each folder (:meth:`write_vtk`, run's snapshots).
+        self._series: dict[Path, VtkSeries] = {}
 
     # -- facts -----------------------------------------------------------------------------
     @property
@@ -280,6 +284,41 @@ class Simulation:
         out.update(e.ledger())
         return {k: float(v) for k, v in out.items()}
 
+    def snapshot(self) -> ChargeSnapshot:
+        """The particles' state now (copies) with the drum's angle and angular velocity; once
+        the particles are placed (after :meth:`fill`, else ``RuntimeError``)."""
+        if self._phase == "empty":
+            raise RuntimeError("there is no charge to show yet: the drum is empty; call fill(), "
+                               "settle() or run() first")
+        e = self._engine
+        return ChargeSnapshot(
+            scene=self._scene, time_s=self.time, step=int(e.step_count),
+            drum_angle=self.drum_angle, omega=float(e.omega),
+            positions=self.positions.copy(), velocities=self.velocities.copy(),
+            spins=self.spins.copy(), radii=self._scene.particle_radii(),
+            materials=self._scene.particle_materials())
+
+    def write_vtk(self, folder: str | os.PathLike[str]) -> tuple[Path, Path]:
+        """Writes the state now into the VTK series in ``folder`` (made if missing), for
+        ParaView: the particles, the drum at the same angle and the ``.pvd`` collections
+        (:mod:`millscope.engine.snapshots` describes the files). A folder not writable raises
+        ``ValueError`` naming it.
+
+        Returns
+        -------
+        (Path, Path)
+            The particle file and the drum file written.
+        """
+        return self._vtk_series("folder", folder).add(self.snapshot())
+
+    def _vtk_series(self, where: str, folder: str | os.PathLike[str]) -> VtkSeries:
+        """The series this simulation writes into ``folder`` (checked, see VtkSeries)."""
+        path = check_folder(where, folder)
+        key = path.resolve()
+        if key not in self._series:
+            self._series[key] = VtkSeries(path, up_to_step=int(self._engine.step_count))
+        return self._series[key]
+
     def max_overlap_ratio(self) -> float:
         """Largest contact overlap over the radius of the smaller body (dimensionless)."""
         return float(self._engine.max_overlap_ratio())
@@ -336,7 +375,8 @@ class Simulation:
     # -- running -----------------------------------------------------------------------------
     def run(self, duration: float, sample_dt: float = 0.01,
             sampling: Literal["instant", "mean"] = "instant", *,
-            progress: bool = True) -> TorqueRecord:
+            progress: bool = True, snapshot_every: int | None = None,
+            snapshot_dir: str | os.PathLike[str] | None = None) -> TorqueRecord:
         """Runs the rotating mill for ``duration`` s and returns its drive torque.
 
         The first call fills and settles the charge and starts the drum; record time 0 is the
@@ -352,6 +392,18 @@ class Simulation:
             Instantaneous torque at each sample time, or the mean over each interval.
         progress : bool
             Show a tqdm progress bar.
+        snapshot_every : int, optional
+            Write a VTK snapshot (:meth:`write_vtk`) into ``snapshot_dir`` after every torque
+            sample whose index k (t_k = k sample_dt) is a multiple of this, >= 1: the state then
+            is that of the step the sample was taken at. The run is cut there into the same
+            engine calls a resumed run makes, so the torque is the same to the bit as without
+            snapshots. A snapshot that cannot be written warns and the run goes on without
+            further snapshots.
+        snapshot_dir : path-like, optional
+            The folder of the snapshots (made if missing, must be writable); given together with
+            ``snapshot_every``. The series there goes on where this simulation's state is (a run
+            continued from a checkpoint keeps the earlier snapshots; a new simulation starts
+            afresh).
 
         Returns
         -------
@@ -371,11 +423,18 @@ class Simulation:
         if sampling not in ("instant", "mean"):
             raise ValueError(f"sampling = {sampling!r} is not valid; it must be 'instant' or "
                              "'mean'")
+        snapshots = snapshot_every is not None or snapshot_dir is not None
+        every = _checks.count("snapshot_every", snapshot_every) if snapshots else 0
+        if snapshots and snapshot_dir is None:
+            raise _checks.fail("snapshot_dir", None, "a writable folder when snapshot_every is "
+                               "given")
         self._check_steps("duration", duration + sample_dt)
         count = int(round(duration / sample_dt))
         if count < 2:
             raise ValueError(f"duration = {duration} s is not valid; it must hold at least 2 "
                              f"samples of sample_dt = {sample_dt} s")
+        series = (None if snapshot_dir is None
+                  else self._vtk_series("snapshot_dir", snapshot_dir))
         if self._phase in ("empty", "filled"):
             self.settle(progress=progress)
         if self._phase == "settled":
@@ -386,16 +445,26 @@ class Simulation:
         max_steps = self._steps_per_call()
         rows: list[NDArray[np.float64]] = []
         taken = 0
+        last_index: int | None = None  # index k of the last sample taken (with snapshots)
         with _progress(progress, count * sample_dt, "simulating", "s") as bar, \
                 _interrupt_flag() as stop:
             while taken < count and not stop.is_set():
                 before = self.time
+                want = count - taken
+                if series is not None:
+                    # Up to the next sample index that is a multiple of `every` (one sample
+                    # first, to learn where the run starts).
+                    want = min(want, 1 if last_index is None else every - last_index % every)
                 # Calls of at most max_steps steps, each going on with the sample under way.
-                out = np.asarray(e.advance_sampled(sample_dt, sampling == "mean", count - taken,
+                out = np.asarray(e.advance_sampled(sample_dt, sampling == "mean", want,
                                                    max_steps, bool(rows)))
                 rows.append(out)
                 taken += len(out)
                 bar.update(self.time - before)
+                if series is not None and len(out):
+                    last_index = int(round(out[-1, 0] / sample_dt))
+                    if last_index % every == 0:
+                        series = self._snapshot_into(series)
             interrupted = taken < count
         if interrupted:
             warnings.warn(f"run interrupted: kept {taken} of {count} samples", RuntimeWarning,
@@ -404,6 +473,18 @@ class Simulation:
         self.last_parts = {"shell": data[:, 2], "lifters": data[:, 3], "ends": data[:, 4]}
         meta = self._meta(sample_dt, sampling, interrupted)
         return TorqueRecord(data[:, 0], data[:, 1], meta)
+
+    def _snapshot_into(self, series: VtkSeries) -> VtkSeries | None:
+        """Adds the state now to ``series``; None (no more snapshots) when it cannot be
+        written, with a warning: the run and its torque matter more than its pictures."""
+        try:
+            series.add(self.snapshot())
+        except OSError as exc:
+            warnings.warn(f"a VTK snapshot could not be written into {series.folder} "
+                          f"({exc}); the run goes on without snapshots", RuntimeWarning,
+                          stacklevel=3)
+            return None
+        return series
 
     def _steps_per_call(self) -> int:
         """The most steps one call into the engine may take (see _CHUNK_PARTICLE_STEPS)."""
