@@ -174,10 +174,29 @@ def cmd_monitor(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    """The report of a campaign store; exit code 2 with one error line naming the case files
-    it could not read, after writing the report of the others."""
-    from ..report.reports import UnreadableCasesError, write_report
+    """The report of a campaign store, or of a study's folder (its plan, ``study.json``, and
+    its store): exit code 2 with one error line naming the case files it could not read,
+    after writing the report of the others."""
+    from ..campaign.studies import PLAN_FILE, read_study
+    from ..report.reports import UnreadableCasesError, write_report, write_study
 
+    folder = Path(args.store)
+    if folder.name == "store" and (folder.parent / PLAN_FILE).is_file():
+        folder = folder.parent  # a study's store: report the study
+    if (folder / PLAN_FILE).is_file():
+        if args.block is not None:
+            raise CliError("--block is not valid for a study: each setting's block is in "
+                           f"its plan ({folder / PLAN_FILE})")
+        try:
+            result = read_study(folder)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+        quantity = "energy_ratio" if len(result.plan.load_levels) > 1 else "energy"
+        written = write_study(result, args.out or folder, quantity=quantity)
+        print(result.to_markdown(quantity))
+        for path in written:
+            print(f"wrote {path}")
+        return 0
     try:
         path = write_report(args.store, args.out, progress=not args.no_progress,
                             block=None if args.block is None else tuple(args.block),
@@ -234,7 +253,7 @@ _STUDY_LADDERS = (("dt_fraction", "vary_dt_fraction"), ("shear_modulus_factor", 
 
 def cmd_study_accuracy(args: argparse.Namespace) -> int:
     """Error against run time: a reference setting and one-knob ladders around it."""
-    from ..campaign.studies import Setting, StudyPlan, run_study
+    from ..campaign.studies import Setting, StudyPlan, run_study, save_study_plan
     from ..report.reports import write_study
 
     reference = Setting(dt_fraction=args.dt_fraction, shear_modulus_factor=args.shear,
@@ -245,8 +264,8 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
     if not ladders:
         raise CliError("give at least one ladder: --vary-dt-fraction, --vary-shear, "
                        "--vary-record, --vary-warm-up, --vary-sampling or --vary-scale")
-    if args.quantity == "slope_a" and len(set(args.levels)) < 2:
-        raise CliError("--quantity slope_a needs 2 or more --levels (and --particles)")
+    if args.quantity in ("slope_a", "energy_ratio") and len(set(args.levels)) < 2:
+        raise CliError(f"--quantity {args.quantity} needs 2 or more --levels (and --particles)")
     plan = StudyPlan.around(reference, ladders, seeds=tuple(range(args.seeds)),
                             speed_fraction=args.speed,
                             particles=None if args.particles == "none" else args.particles,
@@ -255,6 +274,7 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CliError(f"--out {str(out)!r} is not valid; it must be a folder")
+    save_study_plan(plan, out)  # so that `millscope report OUT` remakes the tables from the store
     runs = len(plan.cases())
     print(f"millscope study accuracy: {len(plan.settings)} settings x {len(plan.load_levels)} "
           f"level(s) x {len(plan.seeds)} seeds = {runs} runs, {args.workers} at a time on "
@@ -392,14 +412,18 @@ def build_parser() -> argparse.ArgumentParser:
     add_torque_file_arguments(p)
     p.set_defaults(func=cmd_monitor)
 
-    p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",
+    p = sub.add_parser("report", help="report of a campaign store or a study (Markdown + figures)",
                        description="Analyses a campaign store (paper section 6) and writes "
                                    "report.md with the Table 6 analogue, per-group and per-case "
                                    "tables, Figs. 9-15 as PNG and a calibration per group. "
                                    "Case files it cannot read are listed in the report, and "
-                                   "it then exits with code 2 naming them.")
-    p.add_argument("store", help="campaign store directory")
-    p.add_argument("--out", default=None, help="output folder (default STORE/report)")
+                                   "it then exits with code 2 naming them. Given a study's "
+                                   "folder (the --out of 'study accuracy', holding study.json "
+                                   "and store/), it writes the study's accuracy.csv, .md and "
+                                   ".png from the finished runs instead, simulating nothing.")
+    p.add_argument("store", help="campaign store directory, or a study's folder")
+    p.add_argument("--out", default=None,
+                   help="output folder (default STORE/report; a study's own folder)")
     p.add_argument("--block", type=float, nargs=2, metavar=("T1", "T2"), default=None,
                    help="block to analyse, s (default: as the campaign analysed it)")
     p.add_argument("--bootstrap", type=_positive_int, default=1000,
@@ -510,7 +534,8 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("--combine", action="store_true",
                        help="also run the cheapest value of every ladder together")
     p.add_argument("--quantity", default="energy",
-                   choices=["mean_torque", "energy", "lth_amplitude", "slope_a"],
+                   choices=["mean_torque", "energy", "lth_amplitude", "slope_a",
+                            "energy_ratio"],
                    help="the error plotted and whose Pareto front is marked (default energy)")
     p.add_argument("--threads", type=thread_count, default=1,
                    help="engine threads per run, at most the cores this process may use "

@@ -50,10 +50,13 @@ seed mean.
 
 from __future__ import annotations
 
+import json
 import os
+from pathlib import Path
 from typing import Any
 
 from .. import _checks
+from .._files import MAX_JSON_BYTES, atomic_write, read_json
 from ..signal.analysis import AnalysisSettings
 from .cases import CaseResult
 from .runs import Campaign
@@ -70,8 +73,17 @@ __all__ = [
     "StudyResult",
     "StudyRow",
     "StudyRun",
+    "PLAN_FILE",
+    "read_study",
+    "read_study_plan",
     "run_study",
+    "save_study_plan",
 ]
+
+#: The file in a study's folder that holds its plan (:func:`save_study_plan`); the runs are in
+#: the campaign store ``<folder>/store``.
+PLAN_FILE = "study.json"
+_PLAN_FORMAT = "millscope-study-1"
 
 
 # -- running -----------------------------------------------------------------------------------
@@ -148,7 +160,75 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
         raise RuntimeError(f"{len(failed)} of {len(results)} runs failed, first "
                            f"{failed[0].case.name}: {failed[0].error}; see "
                            f"{campaign.store / 'manifest.json'} (a rerun retries them)")
-    by_hash = {r.hash: r for r in results}
+    return _tabulate(plan, campaign.store, results, partial=False)
+
+
+def _tabulate(plan: StudyPlan, store: Path, results: list[CaseResult], *,
+              partial: bool) -> StudyResult:
+    """The table of the finished ones of a plan's cases (``results`` of any order)."""
+    by_hash = {r.hash: r for r in results if r.ok}
     runs = [_run_of(plan, k, level, seed, by_hash[case.hash()])
-            for k, level, seed, case in plan._cases]
-    return StudyResult.from_runs(plan, runs, store=campaign.store)
+            for k, level, seed, case in plan._cases if case.hash() in by_hash]
+    return StudyResult.from_runs(plan, runs, store=store, partial=partial)
+
+
+def save_study_plan(plan: StudyPlan, folder: str | os.PathLike[str]) -> Path:
+    """Writes the plan into ``<folder>/study.json`` (atomically), so that the study's report
+    can be made again from its store (:func:`read_study`) without the command that ran it.
+
+    Returns
+    -------
+    Path
+    """
+    if not isinstance(plan, StudyPlan):
+        raise _checks.fail("plan", plan, "a StudyPlan")
+    path = Path(folder) / PLAN_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path, "w") as fh:
+        json.dump({"format": _PLAN_FORMAT, "plan": plan.to_dict()}, fh, indent=1)
+        fh.write("\n")
+    return path
+
+
+def read_study_plan(folder: str | os.PathLike[str]) -> StudyPlan:
+    """The plan :func:`save_study_plan` wrote into ``folder`` (an untrusted file: checked).
+
+    Raises
+    ------
+    ValueError
+        naming the file, when it is missing, not a study plan or out of range.
+    """
+    path = Path(folder) / PLAN_FILE
+    data = read_json(path, "study plan", max_bytes=MAX_JSON_BYTES)
+    if not isinstance(data, dict) or data.get("format") != _PLAN_FORMAT or "plan" not in data:
+        raise ValueError(f"{path} is not a millscope study plan (format {_PLAN_FORMAT!r})")
+    return StudyPlan.from_dict(data["plan"], where=str(path))
+
+
+def read_study(folder: str | os.PathLike[str]) -> StudyResult:
+    """The table of a study from what its folder holds, without running anything.
+
+    Reads the plan (``<folder>/study.json``) and the finished runs of its campaign store
+    (``<folder>/store``) and tabulates every setting whose runs are all finished; the others
+    are listed in :attr:`StudyResult.pending` (a study still under way, or stopped).
+
+    Parameters
+    ----------
+    folder : path
+        The study's folder (the ``--out`` of ``millscope study accuracy``).
+
+    Returns
+    -------
+    StudyResult
+
+    Raises
+    ------
+    ValueError
+        when the plan cannot be read, or the reference's runs are not all finished.
+    """
+    plan = read_study_plan(folder)
+    store = Path(folder) / "store"
+    if not store.is_dir():
+        raise ValueError(f"{store} is not valid; the study's campaign store must be a folder")
+    results = Campaign(plan.cases(), store, block=None).results()
+    return _tabulate(plan, store, results, partial=True)

@@ -1,0 +1,168 @@
+"""A study's report made again from its folder (plan file and campaign store), simulating
+nothing: the committed paper-scale study (data/study-paper-balls) and synthetic runs.
+
+References: numpy on the stored records (mean torque, the errors of the seed means), numpy on
+the runs' energies (the per-unit energy ratio), and the plan that wrote the plan file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from millscope.app.cli import main
+from millscope.campaign.studies import (
+    PLAN_FILE,
+    Setting,
+    StudyPlan,
+    StudyResult,
+    read_study,
+    read_study_plan,
+    save_study_plan,
+)
+from millscope.signal.record import TorqueRecord
+
+from .test_studies import SHORT, _fake_runs
+
+STUDY = Path(__file__).resolve().parents[1] / "data" / "study-paper-balls"
+
+
+# -- the plan file ------------------------------------------------------------------------------
+
+
+def test_the_plan_file_reads_back_the_plan_that_wrote_it(tmp_path) -> None:
+    plan = StudyPlan.around(SHORT, {"dt_fraction": [0.1], "sampling": ["mean"]},
+                            seeds=(3, 5), particles="ceramic", load_levels=(1, 4))
+    save_study_plan(plan, tmp_path)
+    back = read_study_plan(tmp_path)
+    assert back == plan
+    assert back.reference == plan.reference
+    assert [c.hash() for c in back.cases()] == [c.hash() for c in plan.cases()]
+
+
+@pytest.mark.parametrize(("edit", "words"), [
+    (lambda d: d.pop("format"), ["not a millscope study plan"]),
+    (lambda d: d["plan"].pop("seeds"), ["exactly the fields", "seeds"]),
+    (lambda d: d["plan"].update(reference=7), ["reference = 7", "0..1"]),
+    (lambda d: d["plan"].update(seeds=[1]), ["StudyPlan.seeds", "at least 2"]),
+    (lambda d: d["plan"]["settings"][0].update(dt_fraction=2.0), ["dt_fraction = 2.0"]),
+    (lambda d: d["plan"]["settings"][0].update(colour="red"), ["settings is not valid"]),
+])
+def test_a_damaged_plan_file_is_one_clear_error(tmp_path, edit, words) -> None:
+    save_study_plan(StudyPlan.ladder("dt_fraction", [0.1, 0.3], base=SHORT), tmp_path)
+    path = tmp_path / PLAN_FILE
+    data = json.loads(path.read_text())
+    edit(data)
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValueError) as info:
+        read_study_plan(tmp_path)
+    for word in words:
+        assert word in str(info.value)
+
+
+# -- the per-unit energy ratio ------------------------------------------------------------------
+
+
+def test_the_energy_ratio_is_last_over_first_level_per_seed() -> None:
+    plan = StudyPlan.ladder("dt_fraction", [0.1, 0.3], base=SHORT, particles="ceramic",
+                            load_levels=(4, 1), seeds=(0, 1, 2))
+    runs = _fake_runs(plan, np.random.default_rng(5))
+    result = StudyResult.from_runs(plan, runs)
+
+    def ratios(k: int) -> np.ndarray:
+        energy = {(r.setting, r.load_level, r.seed): r.energy for r in runs}
+        return np.array([energy[(k, 4, s)] / energy[(k, 1, s)] for s in plan.seeds])
+
+    q, q_ref = ratios(1), ratios(0)
+    for row in result.rows:
+        e = row.quantities["energy_ratio"]
+        if row.reference:
+            assert e.mean == pytest.approx(q_ref.mean())
+            assert e.error == 0.0
+        else:
+            assert e.mean == pytest.approx(q.mean())
+            assert e.error == pytest.approx((q.mean() - q_ref.mean()) / q_ref.mean())
+            assert e.error_se == pytest.approx(
+                np.sqrt(q.var(ddof=1) / 3 + q_ref.var(ddof=1) / 3) / q_ref.mean())
+    se = q_ref.std(ddof=1) / math.sqrt(3) / q_ref.mean()
+    need = max(2, math.ceil(3 * (se / 0.05) ** 2))
+    assert f"a 5 % standard error needs {need} seeds" in result.to_markdown("energy_ratio")
+
+
+def test_a_partial_study_leaves_out_unfinished_settings_but_not_the_reference() -> None:
+    plan = StudyPlan.ladder("dt_fraction", [0.1, 0.2, 0.3], base=SHORT, seeds=(0, 1))
+    runs = _fake_runs(plan, np.random.default_rng(6))
+    some = [r for r in runs if not (r.setting == 2 and r.seed == 1)]
+    result = StudyResult.from_runs(plan, some, partial=True)
+    assert result.settings == plan.settings[:2]
+    assert result.pending == (plan.settings[2],)
+    assert "Not finished yet (left out): " + plan.settings[2].label in result.to_markdown()
+    with pytest.raises(ValueError, match="runs lack setting 2"):
+        StudyResult.from_runs(plan, some)
+    no_ref = [r for r in runs if r.setting != plan.reference_index]
+    with pytest.raises(ValueError, match="the reference: nothing to compare with yet"):
+        StudyResult.from_runs(plan, no_ref, partial=True)
+
+
+# -- the committed paper-scale study ------------------------------------------------------------
+
+
+def _block_means(result: StudyResult, k: int) -> np.ndarray:
+    """Mean torque of each seed's block, by numpy on the stored record."""
+    setting = result.plan.settings[k]
+    out = []
+    for run in sorted((r for r in result.runs if r.setting == k), key=lambda r: r.seed):
+        record = TorqueRecord.load(STUDY / "store" / "cases" / f"{run.hash}.npz")
+        t, torque = record.time_s, record.torque_Nm
+        block = (t >= setting.warm_up_s) & (t < setting.duration_s)
+        out.append(torque[block].mean())
+    return np.array(out)
+
+
+def test_the_committed_study_reads_back_without_simulating() -> None:
+    result = read_study(STUDY)
+    plan = result.plan
+    assert plan.settings[plan.reference_index].scale == "paper"
+    k_ref = plan.reference_index
+    ref = _block_means(result, k_ref)
+    ref_row = next(r for r in result.rows if r.reference)
+    assert ref_row.quantities["mean_torque"].mean == pytest.approx(ref.mean(), rel=1e-12)
+    for row in result.rows:
+        if row.reference:
+            continue
+        v = _block_means(result, plan.settings.index(row.setting))
+        e = row.quantities["mean_torque"]
+        assert e.error == pytest.approx((v.mean() - ref.mean()) / ref.mean(), rel=1e-9)
+        assert e.error_se == pytest.approx(
+            np.sqrt(v.var(ddof=1) / v.size + ref.var(ddof=1) / ref.size) / ref.mean(), rel=1e-9)
+    assert len(result.rows) + len(result.pending) == len(plan.settings)
+
+
+def test_report_on_a_study_folder_writes_its_tables(tmp_path, capsys) -> None:
+    folder = tmp_path / "study"
+    shutil.copytree(STUDY, folder)
+    for target in (folder, folder / "store"):  # the folder or its store
+        out = tmp_path / f"out-{target.name}"
+        assert main(["report", str(target), "--out", str(out)]) == 0
+        printed = capsys.readouterr().out
+        assert "(reference)" in printed
+        table = StudyResult.from_csv(out / "accuracy.csv")
+        assert [r.label for r in table.rows] == [r.label for r in read_study(folder).rows]
+        assert (out / "accuracy.png").stat().st_size > 0
+    assert main(["report", str(folder), "--block", "4", "14"]) == 2
+    assert "--block is not valid for a study" in capsys.readouterr().err
+
+
+def test_report_on_a_study_without_its_reference_is_one_error(tmp_path, capsys) -> None:
+    plan = StudyPlan.ladder("dt_fraction", [0.1, 0.3], base=Setting(record_s=1.0, warm_up_s=0.5))
+    save_study_plan(plan, tmp_path)
+    (tmp_path / "store").mkdir()
+    assert main(["report", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("millscope: error:") and "nothing to compare with yet" in err
+    assert len(err.strip().splitlines()) == 1
