@@ -10,12 +10,14 @@ from __future__ import annotations
 import json
 import math
 import shutil
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from millscope.app.cli import main
+from millscope.campaign import Campaign
 from millscope.campaign.studies import (
     PLAN_FILE,
     Setting,
@@ -23,6 +25,7 @@ from millscope.campaign.studies import (
     StudyResult,
     read_study,
     read_study_plan,
+    run_study,
     save_study_plan,
 )
 from millscope.signal.record import TorqueRecord
@@ -166,3 +169,30 @@ def test_report_on_a_study_without_its_reference_is_one_error(tmp_path, capsys) 
     err = capsys.readouterr().err
     assert err.startswith("millscope: error:") and "nothing to compare with yet" in err
     assert len(err.strip().splitlines()) == 1
+
+
+# -- shorter blocks cut from longer runs (tiny DEM) ----------------------------------------------
+
+
+def test_a_shorter_block_is_cut_from_the_longer_run_exactly(tmp_path) -> None:
+    """The record ladder runs only its longest block; the shorter one, run on its own as a
+    campaign case, gives the same samples bit for bit as the head of the longer record."""
+    plan = StudyPlan.ladder("record_s", [1.0, 2.0], base=Setting(warm_up_s=0.5), seeds=(0, 1))
+    short = [i for i, (k, *_) in enumerate(plan._cases) if plan.settings[k].record_s == 1.0]
+    assert [plan.donor(i) is not None for i in range(len(plan.cases()))] == [
+        i in short for i in range(len(plan.cases()))]
+    with ThreadPoolExecutor(1) as pool:
+        result = run_study(plan, tmp_path / "study" / "store", executor=pool, progress=False)
+    assert len(list((tmp_path / "study" / "store" / "cases").glob("*.npz"))) == 2  # only 2 ran
+    alone = Campaign([plan.cases()[short[0]]], tmp_path / "alone", block=None)
+    with ThreadPoolExecutor(1) as pool:
+        (own,) = alone.run(executor=pool, progress=False)
+    donor = result.record(next(r for r in result.runs if r.seed == 0 and not r.derived))
+    n = len(own.record)
+    assert np.array_equal(own.record.torque_Nm, donor.torque_Nm[:n])
+    assert np.array_equal(own.record.time_s, donor.time_s[:n])
+    run = next(r for r in result.runs if r.seed == 0 and r.derived)
+    t, x = own.record.time_s, own.record.torque_Nm
+    assert run.mean_torque == np.mean(x[(t >= 0.5 - 1e-9) & (t < 1.5 - 1e-9)])
+    assert run.particle_steps < next(r.particle_steps for r in result.runs
+                                     if r.seed == 0 and not r.derived)

@@ -89,10 +89,17 @@ _PLAN_FORMAT = "millscope-study-1"
 # -- running -----------------------------------------------------------------------------------
 
 
-def _run_of(plan: StudyPlan, k: int, level: int, seed: int, result: CaseResult) -> StudyRun:
-    """A finished case analysed as the campaign does, with what it cost."""
+def _run_of(plan: StudyPlan, index: int, result: CaseResult) -> StudyRun:
+    """Case ``index`` of the plan analysed as the campaign does, with what it cost.
+
+    ``result`` is that case's, or its donor's (:meth:`StudyPlan.donor`): a run of the same
+    scene, seed, time step, sampling and warm-up with a longer block, whose record begins with
+    exactly the samples the shorter run would take. The shorter block is then cut from it, its
+    particle-steps counted for its own length and its wall time estimated as the donor's in
+    proportion to particle-steps.
+    """
+    k, level, seed, case = plan._cases[index]
     setting = plan.settings[k]
-    case = result.case
     analysis = AnalysisSettings((setting.warm_up_s, setting.duration_s), plan.bandwidth,
                                 plan.window)
     assert result.record is not None  # done cases have a record
@@ -103,14 +110,16 @@ def _run_of(plan: StudyPlan, k: int, level: int, seed: int, result: CaseResult) 
     # the record: energies are compared per the block length actually analysed.
     block_s = result.record.block(*analysis.block).duration_s
     dt = result.record.meta["dt"]
-    settle = result.record.meta.get("settle") or {}
-    steps = round(float(settle.get("time_s", 0.0)) / dt) + round(case.settings.duration_s / dt)
+    settle = round(float((result.record.meta.get("settle") or {}).get("time_s", 0.0)) / dt)
+    steps = settle + round(case.settings.duration_s / dt)
+    ran = settle + round(result.case.settings.duration_s / dt)
     n = case.scene.n_particles
     return StudyRun(setting=k, load_level=level, seed=seed, hash=result.hash,
-                    wall_s=float(result.wall_time_s), particle_steps=float(n * steps),
-                    n_particles=n, dt_s=float(dt), length_m=case.scene.drum.length,
-                    block_s=block_s, mean_torque=analysed.mean_torque,
-                    lth_amplitude=analysed.lth_amplitude, energy=analysed.energy)
+                    wall_s=float(result.wall_time_s) * steps / ran,
+                    particle_steps=float(n * steps), n_particles=n, dt_s=float(dt),
+                    length_m=case.scene.drum.length, block_s=block_s,
+                    mean_torque=analysed.mean_torque, lth_amplitude=analysed.lth_amplitude,
+                    energy=analysed.energy, derived=result.case != case)
 
 
 def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any = None,
@@ -149,7 +158,7 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
     """
     if not isinstance(plan, StudyPlan):
         raise _checks.fail("plan", plan, "a StudyPlan")
-    order = sorted(range(len(plan.cases())),
+    order = sorted((i for i in range(len(plan.cases())) if plan.donor(i) is None),
                    key=lambda i: -plan.planned_particle_steps(plan.settings[plan._cases[i][0]]))
     campaign = Campaign([plan._cases[i][3] for i in order], store, block=None)
     if executor is None and max_workers is None:
@@ -165,10 +174,16 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
 
 def _tabulate(plan: StudyPlan, store: Path, results: list[CaseResult], *,
               partial: bool) -> StudyResult:
-    """The table of the finished ones of a plan's cases (``results`` of any order)."""
+    """The table of the finished ones of a plan's cases (``results`` of any order); a case
+    with a donor (:meth:`StudyPlan.donor`) is cut from the donor's record."""
     by_hash = {r.hash: r for r in results if r.ok}
-    runs = [_run_of(plan, k, level, seed, by_hash[case.hash()])
-            for k, level, seed, case in plan._cases if case.hash() in by_hash]
+    cases = plan.cases()
+    runs = []
+    for i in range(len(cases)):
+        donor = plan.donor(i)
+        source = cases[i if donor is None else donor].hash()
+        if source in by_hash:
+            runs.append(_run_of(plan, i, by_hash[source]))
     return StudyResult.from_runs(plan, runs, store=store, partial=partial)
 
 
@@ -230,5 +245,6 @@ def read_study(folder: str | os.PathLike[str]) -> StudyResult:
     store = Path(folder) / "store"
     if not store.is_dir():
         raise ValueError(f"{store} is not valid; the study's campaign store must be a folder")
-    results = Campaign(plan.cases(), store, block=None).results()
+    ran = [c for i, c in enumerate(plan.cases()) if plan.donor(i) is None]
+    results = Campaign(ran, store, block=None).results()
     return _tabulate(plan, store, results, partial=True)

@@ -199,6 +199,7 @@ class StudyPlan:
     window: str = "hann"
     _cases: tuple[tuple[int, int, int, Case], ...] = field(init=False, repr=False,
                                                            compare=False)
+    _donors: tuple[int | None, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         settings = self.settings
@@ -254,6 +255,7 @@ class StudyPlan:
         self._check_blocks()
         cases = self._build_cases()
         object.__setattr__(self, "_cases", cases)
+        object.__setattr__(self, "_donors", self._find_donors())
         object.__setattr__(self, "reference", self._choose_reference())
 
     def _check_blocks(self) -> None:
@@ -338,6 +340,41 @@ class StudyPlan:
                     owner[digest] = k
                     out.append((k, level, seed, case))
         return tuple(out)
+
+    def _find_donors(self) -> tuple[int | None, ...]:
+        """For each case, the case with the longest block whose record holds its block."""
+        out: list[int | None] = []
+        for k, level, seed, _ in self._cases:
+            own = self.settings[k]
+            longer = [(self.settings[k2].record_s, j)
+                      for j, (k2, level2, seed2, _) in enumerate(self._cases)
+                      if (level2, seed2) == (level, seed)
+                      and self.settings[k2].record_s > own.record_s
+                      and self.settings[k2] == own.replace(record_s=self.settings[k2].record_s)]
+            out.append(max(longer)[1] if longer else None)
+        return tuple(out)
+
+    def donor(self, index: int) -> int | None:
+        """The case whose record holds case ``index``'s block, or None.
+
+        A setting that differs from another only by a shorter block (``record_s``) runs
+        nothing: the engine is deterministic and samples a run the same whether it goes on
+        or stops, so the first ``warm_up_s + record_s`` s of the longer run (same scene,
+        seed, time step, sampling and warm-up) are exactly the shorter run. Its block is cut
+        from the longest such run (``millscope.campaign.studies``).
+
+        Parameters
+        ----------
+        index : int
+            Index into :meth:`cases`.
+
+        Returns
+        -------
+        int or None
+            Index into :meth:`cases` of the donor (never itself derived), or None when the
+            case runs.
+        """
+        return self._donors[index]
 
     def _choose_reference(self) -> Setting:
         ref = self.reference

@@ -58,6 +58,9 @@ class StudyRun:
         Length of the analysed block, N samples x sample_dt, s.
     mean_torque, lth_amplitude, energy : float
         Of the block as the campaign analyses it: N m, N m, (N m)^2 s (not normalised).
+    derived : bool
+        Cut from the record of a longer run (:meth:`StudyPlan.donor`, whose hash ``hash``
+        is); ``wall_s`` is then an estimate, the donor's in proportion to particle-steps.
     """
 
     setting: int
@@ -73,6 +76,7 @@ class StudyRun:
     mean_torque: float
     lth_amplitude: float
     energy: float
+    derived: bool = False
 
     def value(self, quantity: str, length_m: float, block_s: float) -> float:
         """``quantity`` of this run on the footing of a run of drum length ``length_m`` (m)
