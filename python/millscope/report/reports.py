@@ -34,6 +34,7 @@ from tqdm.auto import tqdm
 from .. import _core
 from .._files import atomic_write
 from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
+from ..calibration.discrimination import discrimination
 from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
 from ..campaign.cases import CaseResult
 from ..campaign.runs import Campaign
@@ -324,6 +325,13 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
         if g.fit is not None:
             lines += [f"Fit: {g.fit.equation()}, R² = {r2_text(g.fit)}.", ""]
         lines += _group_table(g) + [""]
+        if g.levels.size >= 2:
+            lines += [discrimination(g, confidence=confidence).to_markdown(),
+                      "How well one block tells each level from the next: the share of block "
+                      "pairs whose energies fall in the right order (the lower level's larger), "
+                      "the same from normal log energies, and each block's fill estimate "
+                      "against the group's own calibration (which has seen the block, so the "
+                      "estimates are optimistic; the interval widths are the method's).", ""]
         if g.name in calibrations:
             lines += [f"Calibration: [`{calibrations[g.name]}`]({calibrations[g.name]}).", ""]
         elif g.fit is not None:
