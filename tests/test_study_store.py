@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from millscope.app.cli import main
+from millscope.app.cli import build_parser, main
 from millscope.campaign import Campaign
 from millscope.campaign.studies import (
     PLAN_FILE,
@@ -196,3 +196,24 @@ def test_a_shorter_block_is_cut_from_the_longer_run_exactly(tmp_path) -> None:
     assert run.mean_torque == np.mean(x[(t >= 0.5 - 1e-9) & (t < 1.5 - 1e-9)])
     assert run.particle_steps < next(r.particle_steps for r in result.runs
                                      if r.seed == 0 and not r.derived)
+
+
+def test_also_adds_a_setting_with_several_knobs_changed(tmp_path, capsys) -> None:
+    """--also KNOB=V,... parses into Setting fields; a bad one is one error line (argparse's
+    exit 2) before any work."""
+    out = tmp_path / "s"
+    args = ["study", "accuracy", "--out", str(out), "--record", "1", "--warm-up", "0.5",
+            "--seeds", "2", "--vary-dt-fraction", "0.3", "--no-progress"]
+    for bad in ("scale=tiny,colour=red", "shear=soft", "scale=tiny,scale=small", "tiny"):
+        with pytest.raises(SystemExit) as info:
+            main([*args, "--also", bad])
+        err = capsys.readouterr().err
+        assert info.value.code == 2 and "--also" in err and "is not valid" in err
+        assert not out.exists()
+    parsed = build_parser().parse_args([*args, "--also", "scale=tiny,shear=0.001",
+                                        "--also", "dt-fraction=0.2,sampling=instant"])
+    assert parsed.also == [{"scale": "tiny", "shear_modulus_factor": 0.001},
+                           {"dt_fraction": 0.2, "sampling": "instant"}]
+    reference = Setting(dt_fraction=0.1, record_s=1.0, warm_up_s=0.5)
+    settings = [reference.replace(**changes) for changes in parsed.also]
+    assert settings[0].label == "dt 0.1 T_R, G x0.001, tiny, 0.5+1 s, instant"

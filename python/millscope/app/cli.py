@@ -18,7 +18,7 @@ import sys
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from .. import __version__
 
@@ -251,6 +251,31 @@ _STUDY_LADDERS = (("dt_fraction", "vary_dt_fraction"), ("shear_modulus_factor", 
                   ("sampling", "vary_sampling"), ("scale", "vary_scale"))
 
 
+#: The knobs of ``study accuracy --also``, as the reference's options name them.
+_ALSO_KNOBS = {"dt-fraction": ("dt_fraction", float), "shear": ("shear_modulus_factor", float),
+               "record": ("record_s", float), "warm-up": ("warm_up_s", float),
+               "sampling": ("sampling", str), "scale": ("scale", str)}
+
+
+def _setting_changes(text: str) -> dict[str, Any]:
+    """``"scale=tiny,shear=0.001"`` as Setting fields, for ``--also``."""
+    out: dict[str, Any] = {}
+    for item in text.split(","):
+        knob, sep, value = item.partition("=")
+        knob = knob.strip()
+        if not sep or knob not in _ALSO_KNOBS or _ALSO_KNOBS[knob][0] in out:
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is not valid; it must be KNOB=VALUE pairs joined by commas, each "
+                f"knob once, of {', '.join(_ALSO_KNOBS)}")
+        name, kind = _ALSO_KNOBS[knob]
+        try:
+            out[name] = kind(value.strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{knob} = {value!r} is not valid; it must be a "
+                                             "number") from None
+    return out
+
+
 def cmd_study_accuracy(args: argparse.Namespace) -> int:
     """Error against run time: a reference setting and one-knob ladders around it."""
     from ..campaign.studies import Setting, StudyPlan, run_study, save_study_plan
@@ -264,13 +289,14 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
     if not ladders:
         raise CliError("give at least one ladder: --vary-dt-fraction, --vary-shear, "
                        "--vary-record, --vary-warm-up, --vary-sampling or --vary-scale")
+    extra = [reference.replace(**changes) for changes in args.also or []]
     if args.quantity in ("slope_a", "energy_ratio") and len(set(args.levels)) < 2:
         raise CliError(f"--quantity {args.quantity} needs 2 or more --levels (and --particles)")
     plan = StudyPlan.around(reference, ladders, seeds=tuple(range(args.seeds)),
                             speed_fraction=args.speed,
                             particles=None if args.particles == "none" else args.particles,
                             load_levels=tuple(args.levels), threads=args.threads,
-                            combine=args.combine)
+                            extra=extra, combine=args.combine)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CliError(f"--out {str(out)!r} is not valid; it must be a folder")
@@ -533,6 +559,10 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("--vary-scale", nargs="+", metavar="SCALE")
     group.add_argument("--combine", action="store_true",
                        help="also run the cheapest value of every ladder together")
+    group.add_argument("--also", type=_setting_changes, action="append", metavar="KNOB=V,...",
+                       help="also run the reference with several knobs changed at once, e.g. "
+                            "scale=tiny,shear=0.001 (knobs: " + ", ".join(_ALSO_KNOBS)
+                            + "); may be repeated")
     p.add_argument("--quantity", default="energy",
                    choices=["mean_torque", "energy", "lth_amplitude", "slope_a",
                             "energy_ratio"],
