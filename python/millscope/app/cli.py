@@ -191,6 +191,7 @@ def cmd_report(args: argparse.Namespace) -> int:
             result = read_study(folder)
         except ValueError as exc:
             raise CliError(str(exc)) from None
+        assert result.plan is not None  # read from a plan file
         quantity = "energy_ratio" if len(result.plan.load_levels) > 1 else "energy"
         written = write_study(result, args.out or folder, quantity=quantity)
         print(result.to_markdown(quantity))
