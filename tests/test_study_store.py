@@ -157,6 +157,12 @@ def test_report_on_a_study_folder_writes_its_tables(tmp_path, capsys) -> None:
         table = StudyResult.from_csv(out / "accuracy.csv")
         assert [r.label for r in table.rows] == [r.label for r in read_study(folder).rows]
         assert (out / "accuracy.png").stat().st_size > 0
+    assert main(["report", str(folder), "--out", str(tmp_path / "steps"),
+                 "--cost", "particle_steps"]) == 0
+    printed = capsys.readouterr().out
+    front = read_study(folder).pareto("energy", "particle_steps")
+    assert "Pareto front of particle-steps against" in printed
+    assert printed.count(" ◆") == len(front)
     assert main(["report", str(folder), "--block", "4", "14"]) == 2
     assert "--block is not valid for a study" in capsys.readouterr().err
 

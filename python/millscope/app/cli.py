@@ -193,8 +193,8 @@ def cmd_report(args: argparse.Namespace) -> int:
             raise CliError(str(exc)) from None
         assert result.plan is not None  # read from a plan file
         quantity = "energy_ratio" if len(result.plan.load_levels) > 1 else "energy"
-        written = write_study(result, args.out or folder, quantity=quantity)
-        print(result.to_markdown(quantity))
+        written = write_study(result, args.out or folder, quantity=quantity, cost=args.cost)
+        print(result.to_markdown(quantity, args.cost))
         for path in written:
             print(f"wrote {path}")
         return 0
@@ -311,8 +311,8 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
                         out / "store", "runs")
     if result is None:
         return EXIT_INTERRUPTED
-    written = write_study(result, out, quantity=args.quantity)
-    print(result.to_markdown(args.quantity))
+    written = write_study(result, out, quantity=args.quantity, cost=args.cost)
+    print(result.to_markdown(args.quantity, args.cost))
     for path in written:
         print(f"wrote {path}")
     return 0
@@ -382,6 +382,12 @@ def torque_file_options(args: argparse.Namespace) -> dict[str, object]:
              "decimal": args.decimal, "skiprows": args.skip_rows, "encoding": args.encoding,
              "resample": args.resample or None, "jitter_rtol": args.jitter_tol}
     return {k: v for k, v in given.items() if v is not None}
+
+
+def _add_cost_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--cost", default="wall_s", choices=["wall_s", "particle_steps"],
+                   help="a study's cost axis: wall-clock s per run, or particle-steps per run "
+                        "(the same on any machine and load; default wall_s)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -455,6 +461,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="block to analyse, s (default: as the campaign analysed it)")
     p.add_argument("--bootstrap", type=_positive_int, default=1000,
                    help="bootstrap replicates (default 1000)")
+    _add_cost_argument(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_report)
 
@@ -568,6 +575,7 @@ def build_parser() -> argparse.ArgumentParser:
                    choices=["mean_torque", "energy", "lth_amplitude", "slope_a",
                             "energy_ratio"],
                    help="the error plotted and whose Pareto front is marked (default energy)")
+    _add_cost_argument(p)
     p.add_argument("--threads", type=thread_count, default=1,
                    help="engine threads per run, at most the cores this process may use "
                         "(default 1)")

@@ -510,13 +510,13 @@ class StudyResult:
             raise ValueError(f"{source}: no row is marked as the reference")
         return cls(tuple(rows), description=description)
 
-    def to_markdown(self, pareto_quantity: str = "energy") -> str:
+    def to_markdown(self, pareto_quantity: str = "energy", cost: str = "wall_s") -> str:
         """The table in Markdown: per row the setting, its cost, and per quantity the error of
         the seed mean with the seed spread of one run, ``+3.1 % ± 2.0 %``; the reference row
         gives its seed means instead. Settings on the Pareto front of ``pareto_quantity``
-        (cost: wall time) are marked with a ◆.
+        against ``cost`` (``"wall_s"`` or ``"particle_steps"``) are marked with a ◆.
         """
-        front = set(self.pareto(pareto_quantity))
+        front = set(self.pareto(pareto_quantity, cost))
         shown = [q for q in QUANTITIES
                  if any(math.isfinite(r.quantities[q].error) for r in self.rows)]
         multi = len({r.load_level for r in self.rows}) > 1
@@ -555,7 +555,8 @@ class StudyResult:
             "Torques are compared per length of drum and energies per length of drum and of "
             "block (see millscope.studies). Wall time: one run (engine set-up, filling, "
             "settling, warm-up and block) on the plan's engine threads. ◆: on the Pareto front "
-            f"of wall time against the {names[pareto_quantity]} error.",
+            f"of {'wall time' if cost == 'wall_s' else 'particle-steps'} against the "
+            f"{names[pareto_quantity]} error.",
         ]
         ref_ratio = ref_row.quantities["energy_ratio"]
         if math.isfinite(ref_ratio.spread):

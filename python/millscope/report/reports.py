@@ -367,9 +367,10 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
 
 
 def write_study(result: StudyResult, folder: str | os.PathLike[str], stem: str = "accuracy", *,
-                quantity: str = "energy") -> list[Path]:
-    """Writes a study's ``<stem>.csv``, ``<stem>.md`` and ``<stem>.png`` (error against wall
-    time, :func:`millscope.plots.plot_accuracy`) into ``folder``, each atomically.
+                quantity: str = "energy", cost: str = "wall_s") -> list[Path]:
+    """Writes a study's ``<stem>.csv``, ``<stem>.md`` and ``<stem>.png`` (error against cost,
+    ``"wall_s"`` or ``"particle_steps"``, :func:`millscope.plots.plot_accuracy`) into
+    ``folder``, each atomically. Particle-steps do not depend on the machine or its load.
 
     Returns
     -------
@@ -380,6 +381,6 @@ def write_study(result: StudyResult, folder: str | os.PathLike[str], stem: str =
     csv_path, md_path = out / f"{stem}.csv", out / f"{stem}.md"
     result.to_csv(csv_path)
     with atomic_write(md_path, "w") as fh:
-        fh.write(result.to_markdown(quantity))
-    png = plots.save_figure(plots.plot_accuracy(result, quantity), out / f"{stem}.png")
+        fh.write(result.to_markdown(quantity, cost))
+    png = plots.save_figure(plots.plot_accuracy(result, quantity, cost=cost), out / f"{stem}.png")
     return [csv_path, md_path, png]
