@@ -162,7 +162,7 @@ def test_report_on_a_study_folder_writes_its_tables(tmp_path, capsys) -> None:
     printed = capsys.readouterr().out
     front = read_study(folder).pareto("energy", "particle_steps")
     assert "Pareto front of particle-steps against" in printed
-    assert printed.count(" ◆") == len(front)
+    assert printed.count(" ◆ |") == len(front)
     assert main(["report", str(folder), "--block", "4", "14"]) == 2
     assert "--block is not valid for a study" in capsys.readouterr().err
 
