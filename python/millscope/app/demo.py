@@ -44,6 +44,7 @@ from ..calibration.fit import (
 )
 from ..campaign.cases import MAX_DURATION_S, CaseResult, RunSettings
 from ..campaign.runs import Campaign
+from ..campaign.tables import CaseResults
 from ..engine.simulation import _available_cores
 from ..model.presets import (
     LIFTER_COUNT,
@@ -260,7 +261,7 @@ def run_demo(out: str | os.PathLike[str], plan: DemoPlan | None = None, *,
         raise RuntimeError(f"{len(failed)} of {len(results)} cases failed, first "
                            f"{failed[0].scene.name}: {failed[0].error}; see "
                            f"{campaign.store / 'manifest.json'} (a rerun retries them)")
-    results = sorted(results, key=_level)
+    results = CaseResults(sorted(results, key=_level))
     section = main_job_section(results, folder, plan=plan, campaign_wall_s=wall)
     report = write_report(campaign.store, folder, progress=progress, sections=[section])
     calibration = folder / calibration_file_name(_group(results[0]))

@@ -308,6 +308,9 @@ class CaseResult:
     lth_hz, lth_amplitude : float
         The lifter torque harmonic located near lifters x rotation frequency in the block, Hz
         and N m (nan without lifters).
+    lth_noise : float
+        The median amplitude of the bins around it, N m (:attr:`millscope.Peak.noise_amplitude`;
+        nan without lifters).
     lth_snr : float
         Its amplitude over the median amplitude of the bins around it (nan without lifters).
     lth_distinct : bool
@@ -333,6 +336,7 @@ class CaseResult:
     lth_hz: float = math.nan
     lth_amplitude: float = math.nan
     lth_snr: float = math.nan
+    lth_noise: float = math.nan
     lth_distinct: bool = False
     energy: float = math.nan
     energy_relative_std: float = math.nan
@@ -360,6 +364,7 @@ class CaseResult:
             values: dict[str, Any] = {
                 "mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
                 "lth_amplitude": a.lth.amplitude, "lth_snr": a.lth.snr,
+                "lth_noise": a.lth.noise_amplitude,
                 "lth_distinct": a.lth.distinct, "energy": a.energy.energy,
                 "energy_relative_std": a.energy.relative_std}
         else:

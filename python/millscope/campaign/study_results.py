@@ -7,22 +7,27 @@ and the study's table, CSV and Markdown (:class:`StudyResult`); see
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import math
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .. import _checks
 from .._files import atomic_write
+from .._frames import Kind, frame, frame_text
 from ..calibration.logfit import log_fit, per_unit
 from ..model.presets import pilot_mill
 from ..signal.record import TorqueRecord
 from .study_plans import COSTS, KNOBS, LEVEL_QUANTITIES, QUANTITIES, Setting, StudyPlan
+
+if TYPE_CHECKING:
+    from pandas import DataFrame  # type: ignore[import-untyped]
 
 __all__ = ["QuantityError", "SettingSummary", "StudyResult", "StudyRow", "StudyRun"]
 
@@ -429,34 +434,45 @@ class StudyResult:
         return TorqueRecord.load(self.store / "cases" / f"{run.hash}.npz")
 
     # -- tables --------------------------------------------------------------------------------
+    def to_frame(self) -> DataFrame:
+        """The table as a pandas DataFrame, one row per row of :attr:`rows` (setting and load
+        level), in order; the columns of :meth:`to_csv`.
+
+        Columns: ``label`` (str), ``reference`` (bool), the knobs (:data:`KNOBS`:
+        ``dt_fraction`` (time step / Rayleigh time), ``shear_modulus_factor`` (nan for the
+        scale's own), ``record_s`` and ``warm_up_s`` (s), float64; ``sampling`` and ``scale``,
+        str), ``load_level`` (int64), ``n_particles`` (int64), ``dt_s`` (s),
+        ``shear_modulus_ratio``, ``length_m`` (m), float64, ``seeds`` (int64), ``wall_s``
+        (s, one run), ``particle_steps`` (one run), float64, then per quantity ``<q>`` of
+        :data:`QUANTITIES` (its unit there: N m, (N m)^2 s or none) the five float64 columns
+        ``<q>``, ``<q>_std``, ``<q>_error``, ``<q>_spread``, ``<q>_error_se``
+        (:class:`QuantityError`), and ``description`` (str, the same on every row).
+        """
+        rows = []
+        for r in self.rows:
+            row: dict[str, Any] = {"label": r.label, "reference": r.reference,
+                                   **r.setting.to_dict(), "load_level": r.load_level,
+                                   "n_particles": r.n_particles, "dt_s": r.dt_s,
+                                   "shear_modulus_ratio": r.shear_modulus_ratio,
+                                   "length_m": r.length_m, "seeds": r.seeds, "wall_s": r.wall_s,
+                                   "particle_steps": r.particle_steps,
+                                   "description": self.description}
+            for q in QUANTITIES:
+                row.update(zip(_quantity_columns(q), dataclasses.astuple(r.quantities[q]),
+                               strict=True))
+            rows.append(row)
+        return frame(_COLUMNS, rows)
+
     def to_csv(self, path: str | os.PathLike[str] | None = None) -> str:
         """The table as CSV, one line per row (setting and load level); written atomically to
         ``path`` when given. Returns the text.
 
-        Columns: ``label``, ``reference`` (1/0), the knobs (:data:`KNOBS`;
-        ``shear_modulus_factor`` empty for the scale's own), ``load_level``,
-        ``n_particles``, ``dt_s``, ``shear_modulus_ratio``, ``length_m``, ``seeds``,
-        ``wall_s``, ``particle_steps``, then per quantity ``<q>``, ``<q>_std``,
-        ``<q>_error``, ``<q>_spread``, ``<q>_error_se`` (:class:`QuantityError`), and
-        ``description``. Floats are written exactly (``repr``).
+        The columns of :meth:`to_frame`, ``reference`` written 1/0; floats are written
+        exactly, nan (e.g. ``shear_modulus_factor`` for the scale's own) as an empty field.
         """
-        buffer = io.StringIO()
-        writer = csv.writer(buffer, lineterminator="\n")
-        writer.writerow(_csv_columns())
-        for r in self.rows:
-            knobs = r.setting.to_dict()
-            line: list[Any] = [r.label, int(r.reference)]
-            line += ["" if knobs[k] is None else knobs[k] if isinstance(knobs[k], str)
-                     else _plain(knobs[k]) for k in KNOBS]
-            line += [r.load_level, r.n_particles, _plain(r.dt_s), _plain(r.shear_modulus_ratio),
-                     _plain(r.length_m), r.seeds, _plain(r.wall_s), _plain(r.particle_steps)]
-            for q in QUANTITIES:
-                e = r.quantities[q]
-                line += [_plain(e.mean), _plain(e.std), _plain(e.error), _plain(e.spread),
-                         _plain(e.error_se)]
-            line.append(self.description)
-            writer.writerow(line)
-        text = buffer.getvalue()
+        table = self.to_frame()
+        table["reference"] = table["reference"].astype("int64")
+        text = frame_text(table, "csv")
         if path is not None:
             with atomic_write(path, "w") as fh:
                 fh.write(text)
@@ -490,9 +506,9 @@ class StudyResult:
                 knobs: dict[str, Any] = {k: line[k] for k in KNOBS}
                 for k in ("dt_fraction", "record_s", "warm_up_s"):
                     knobs[k] = float(knobs[k])
-                g = knobs["shear_modulus_factor"]
-                knobs["shear_modulus_factor"] = None if g == "" else float(g)
-                quantities = {q: QuantityError(*(float(line.get(c) or "nan")
+                g = _float(knobs["shear_modulus_factor"])
+                knobs["shear_modulus_factor"] = None if math.isnan(g) else g
+                quantities = {q: QuantityError(*(_float(line.get(c) or "")
                                                  for c in _quantity_columns(q)))
                               for q in QUANTITIES}
                 rows.append(StudyRow(
@@ -572,9 +588,9 @@ class StudyResult:
         return "\n".join(notes) + "\n"
 
 
-def _plain(value: float) -> str:
-    """A float as CSV text that reads back exactly."""
-    return repr(float(value))
+def _float(text: str) -> float:
+    """A CSV field as a float; an empty field (a missing value) is nan."""
+    return math.nan if text == "" else float(text)
 
 
 def _quantity_columns(quantity: str) -> tuple[str, ...]:
@@ -583,8 +599,16 @@ def _quantity_columns(quantity: str) -> tuple[str, ...]:
 
 
 def _csv_columns() -> list[str]:
-    columns = ["label", "reference", *KNOBS, "load_level", "n_particles", "dt_s",
-               "shear_modulus_ratio", "length_m", "seeds", "wall_s", "particle_steps"]
-    for q in QUANTITIES:
-        columns += _quantity_columns(q)
-    return [*columns, "description"]
+    return list(_COLUMNS)
+
+
+#: The columns of the table (:meth:`StudyResult.to_frame`) with how each is stored.
+_COLUMNS: dict[str, Kind] = {
+    "label": "str", "reference": "bool",
+    **{k: "str" if k in ("sampling", "scale") else "float" for k in KNOBS},
+    "load_level": "int", "n_particles": "int",
+    "dt_s": "float", "shear_modulus_ratio": "float", "length_m": "float", "seeds": "int",
+    "wall_s": "float", "particle_steps": "float",
+    **{c: "float" for q in QUANTITIES for c in _quantity_columns(q)},
+    "description": "str",
+}
