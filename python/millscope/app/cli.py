@@ -20,7 +20,7 @@ import sys
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from .. import __version__
 from .._frames import FORMATS
@@ -212,11 +212,31 @@ def cmd_monitor(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    """The report of a campaign store; exit code 2 with one error line naming the case files
-    it could not read, after writing the report of the others."""
+    """The report of a campaign store, or of a study's folder (its plan, ``study.json``, and
+    its store): exit code 2 with one error line naming the case files it could not read,
+    after writing the report of the others."""
     from ..campaign.runs import read_store
-    from ..report.reports import UnreadableCasesError, write_report
+    from ..campaign.studies import PLAN_FILE, read_study
+    from ..report.reports import UnreadableCasesError, write_report, write_study
 
+    folder = Path(args.store)
+    if folder.name == "store" and (folder.parent / PLAN_FILE).is_file():
+        folder = folder.parent  # a study's store: report the study
+    if (folder / PLAN_FILE).is_file():
+        if args.block is not None:
+            raise CliError("--block is not valid for a study: each setting's block is in "
+                           f"its plan ({folder / PLAN_FILE})")
+        try:
+            result = read_study(folder)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+        assert result.plan is not None  # read from a plan file
+        quantity = "energy_ratio" if len(result.plan.load_levels) > 1 else "energy"
+        written = write_study(result, args.out or folder, quantity=quantity, cost=args.cost)
+        _print_study(args, result, quantity)
+        for path in written:
+            _note(args, f"wrote {path}")
+        return 0
     block = None if args.block is None else tuple(args.block)
     unreadable = None
     try:
@@ -286,9 +306,42 @@ _STUDY_LADDERS = (("dt_fraction", "vary_dt_fraction"), ("shear_modulus_factor", 
                   ("sampling", "vary_sampling"), ("scale", "vary_scale"))
 
 
+#: The knobs of ``study accuracy --also``, as the reference's options name them.
+_ALSO_KNOBS = {"dt-fraction": ("dt_fraction", float), "shear": ("shear_modulus_factor", float),
+               "record": ("record_s", float), "warm-up": ("warm_up_s", float),
+               "sampling": ("sampling", str), "scale": ("scale", str)}
+
+
+def _setting_changes(text: str) -> dict[str, Any]:
+    """``"scale=tiny,shear=0.001"`` as Setting fields, for ``--also``."""
+    out: dict[str, Any] = {}
+    for item in text.split(","):
+        knob, sep, value = item.partition("=")
+        knob = knob.strip()
+        if not sep or knob not in _ALSO_KNOBS or _ALSO_KNOBS[knob][0] in out:
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is not valid; it must be KNOB=VALUE pairs joined by commas, each "
+                f"knob once, of {', '.join(_ALSO_KNOBS)}")
+        name, kind = _ALSO_KNOBS[knob]
+        try:
+            out[name] = kind(value.strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{knob} = {value!r} is not valid; it must be a "
+                                             "number") from None
+    return out
+
+
+def _print_study(args: argparse.Namespace, result: Any, quantity: str) -> None:
+    """A study's table on stdout: Markdown, or the frame as CSV or JSON (--format)."""
+    if args.format == "text":
+        print(result.to_markdown(quantity, args.cost))
+    else:
+        _print_table(result.to_frame(), args.format)
+
+
 def cmd_study_accuracy(args: argparse.Namespace) -> int:
     """Error against run time: a reference setting and one-knob ladders around it."""
-    from ..campaign.studies import Setting, StudyPlan, run_study
+    from ..campaign.studies import Setting, StudyPlan, run_study, save_study_plan
     from ..report.reports import write_study
 
     reference = Setting(dt_fraction=args.dt_fraction, shear_modulus_factor=args.shear,
@@ -299,16 +352,18 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
     if not ladders:
         raise CliError("give at least one ladder: --vary-dt-fraction, --vary-shear, "
                        "--vary-record, --vary-warm-up, --vary-sampling or --vary-scale")
-    if args.quantity == "slope_a" and len(set(args.levels)) < 2:
-        raise CliError("--quantity slope_a needs 2 or more --levels (and --particles)")
+    extra = [reference.replace(**changes) for changes in args.also or []]
+    if args.quantity in ("slope_a", "energy_ratio") and len(set(args.levels)) < 2:
+        raise CliError(f"--quantity {args.quantity} needs 2 or more --levels (and --particles)")
     plan = StudyPlan.around(reference, ladders, seeds=tuple(range(args.seeds)),
                             speed_fraction=args.speed,
                             particles=None if args.particles == "none" else args.particles,
                             load_levels=tuple(args.levels), threads=args.threads,
-                            combine=args.combine)
+                            extra=extra, combine=args.combine)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CliError(f"--out {str(out)!r} is not valid; it must be a folder")
+    save_study_plan(plan, out)  # so that `millscope report OUT` remakes the tables from the store
     runs = len(plan.cases())
     _note(args, f"millscope study accuracy: {len(plan.settings)} settings x "
                 f"{len(plan.load_levels)} level(s) x {len(plan.seeds)} seeds = {runs} runs, "
@@ -320,11 +375,8 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
                         out / "store", "runs")
     if result is None:
         return EXIT_INTERRUPTED
-    written = write_study(result, out, quantity=args.quantity)
-    if args.format == "text":
-        print(result.to_markdown(args.quantity))
-    else:
-        _print_table(result.to_frame(), args.format)
+    written = write_study(result, out, quantity=args.quantity, cost=args.cost)
+    _print_study(args, result, args.quantity)
     for path in written:
         _note(args, f"wrote {path}")
     return 0
@@ -414,6 +466,12 @@ def torque_file_options(args: argparse.Namespace) -> dict[str, object]:
     return {k: v for k, v in given.items() if v is not None}
 
 
+def _add_cost_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--cost", default="wall_s", choices=["wall_s", "particle_steps"],
+                   help="a study's cost axis: wall-clock s per run, or particle-steps per run "
+                        "(the same on any machine and load; default wall_s)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .bench import thread_count
 
@@ -471,18 +529,23 @@ def build_parser() -> argparse.ArgumentParser:
     add_torque_file_arguments(p)
     p.set_defaults(func=cmd_monitor)
 
-    p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",
+    p = sub.add_parser("report", help="report of a campaign store or a study (Markdown + figures)",
                        description="Analyses a campaign store (paper section 6) and writes "
                                    "report.md with the Table 6 analogue, per-group and per-case "
                                    "tables, Figs. 9-15 as PNG and a calibration per group. "
                                    "Case files it cannot read are listed in the report, and "
-                                   "it then exits with code 2 naming them.")
-    p.add_argument("store", help="campaign store directory")
-    p.add_argument("--out", default=None, help="output folder (default STORE/report)")
+                                   "it then exits with code 2 naming them. Given a study's "
+                                   "folder (the --out of 'study accuracy', holding study.json "
+                                   "and store/), it writes the study's accuracy.csv, .md and "
+                                   ".png from the finished runs instead, simulating nothing.")
+    p.add_argument("store", help="campaign store directory, or a study's folder")
+    p.add_argument("--out", default=None,
+                   help="output folder (default STORE/report; a study's own folder)")
     p.add_argument("--block", type=float, nargs=2, metavar=("T1", "T2"), default=None,
                    help="block to analyse, s (default: as the campaign analysed it)")
     p.add_argument("--bootstrap", type=_positive_int, default=1000,
                    help="bootstrap replicates (default 1000)")
+    _add_cost_argument(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     _add_format_argument(p, "the store's cases (one row each, failed and unreadable ones "
                             "included; the report is written as well)")
@@ -612,9 +675,15 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("--vary-scale", nargs="+", metavar="SCALE")
     group.add_argument("--combine", action="store_true",
                        help="also run the cheapest value of every ladder together")
+    group.add_argument("--also", type=_setting_changes, action="append", metavar="KNOB=V,...",
+                       help="also run the reference with several knobs changed at once, e.g. "
+                            "scale=tiny,shear=0.001 (knobs: " + ", ".join(_ALSO_KNOBS)
+                            + "); may be repeated")
     p.add_argument("--quantity", default="energy",
-                   choices=["mean_torque", "energy", "lth_amplitude", "slope_a"],
+                   choices=["mean_torque", "energy", "lth_amplitude", "slope_a",
+                            "energy_ratio"],
                    help="the error plotted and whose Pareto front is marked (default energy)")
+    _add_cost_argument(p)
     p.add_argument("--threads", type=thread_count, default=1,
                    help="engine threads per run, at most the cores this process may use "
                         "(default 1)")

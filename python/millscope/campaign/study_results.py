@@ -24,7 +24,7 @@ from .._frames import Kind, frame, frame_text
 from ..calibration.logfit import log_fit, per_unit
 from ..model.presets import pilot_mill
 from ..signal.record import TorqueRecord
-from .study_plans import COSTS, KNOBS, QUANTITIES, Setting, StudyPlan
+from .study_plans import COSTS, KNOBS, LEVEL_QUANTITIES, QUANTITIES, Setting, StudyPlan
 
 if TYPE_CHECKING:
     from pandas import DataFrame  # type: ignore[import-untyped]
@@ -63,6 +63,9 @@ class StudyRun:
         Length of the analysed block, N samples x sample_dt, s.
     mean_torque, lth_amplitude, energy : float
         Of the block as the campaign analyses it: N m, N m, (N m)^2 s (not normalised).
+    derived : bool
+        Cut from the record of a longer run (:meth:`StudyPlan.donor`, whose hash ``hash``
+        is); ``wall_s`` is then an estimate, the donor's in proportion to particle-steps.
     """
 
     setting: int
@@ -78,6 +81,7 @@ class StudyRun:
     mean_torque: float
     lth_amplitude: float
     energy: float
+    derived: bool = False
 
     def value(self, quantity: str, length_m: float, block_s: float) -> float:
         """``quantity`` of this run on the footing of a run of drum length ``length_m`` (m)
@@ -141,9 +145,9 @@ class StudyRow:
     particle_steps : float
         Particles x time steps of one run, settling included (mean over the seeds).
     quantities : mapping of str to QuantityError
-        ``"mean_torque"``, ``"energy"``, ``"lth_amplitude"`` and ``"slope_a"`` (the slope
-        is a property of the setting, the same on each of its levels; nan entries with one
-        load level).
+        ``"mean_torque"``, ``"energy"``, ``"lth_amplitude"``, ``"slope_a"`` and
+        ``"energy_ratio"`` (the last two compare load levels: the same on each of the
+        setting's levels; nan entries with one load level).
     """
 
     setting: Setting
@@ -227,6 +231,9 @@ class StudyResult:
         The campaign store holding the runs' records.
     description : str
         The case studied, e.g. ``"balls-MS, 3 seeds, 0.71 of critical speed"``.
+    pending : tuple of Setting
+        Settings of the plan not tabulated because some of their runs are not finished
+        (:meth:`from_runs` with ``partial``).
     """
 
     rows: tuple[StudyRow, ...]
@@ -234,26 +241,49 @@ class StudyResult:
     runs: tuple[StudyRun, ...] = ()
     store: Path | None = None
     description: str = ""
+    pending: tuple[Setting, ...] = ()
 
     @classmethod
     def from_runs(cls, plan: StudyPlan, runs: Iterable[StudyRun], *,
-                  store: Path | None = None) -> StudyResult:
+                  store: Path | None = None, partial: bool = False) -> StudyResult:
         """The table of a plan's runs (one per setting, load level and seed).
+
+        Parameters
+        ----------
+        plan : StudyPlan
+        runs : iterable of StudyRun
+        store : Path, optional
+            The campaign store holding the runs' records.
+        partial : bool
+            Tabulate only the settings whose runs are all there (a study still under way) and
+            list the others in :attr:`pending`; the reference's runs must all be there.
 
         Raises
         ------
         ValueError
-            when a run is missing.
+            when a run is missing (with ``partial``, a run of the reference).
         """
         run_list = tuple(runs)
         by_key = {(r.setting, r.load_level, r.seed): r for r in run_list}
-        for k in range(len(plan.settings)):
-            for level in plan.load_levels:
-                for seed in plan.seeds:
-                    if (k, level, seed) not in by_key:
-                        raise ValueError(f"runs lack setting {k} ({plan.settings[k].label}) at "
-                                         f"load level {level}, seed {seed}")
+
+        def missing(k: int) -> list[tuple[int, int]]:
+            return [(level, seed) for level in plan.load_levels for seed in plan.seeds
+                    if (k, level, seed) not in by_key]
+
         ref = plan.reference_index
+        complete, pending = [], []
+        for k in range(len(plan.settings)):
+            lacking = missing(k)
+            if not lacking:
+                complete.append(k)
+            elif partial and k != ref:
+                pending.append(plan.settings[k])
+            else:
+                level, seed = lacking[0]
+                raise ValueError(f"runs lack setting {k} ({plan.settings[k].label}) at load "
+                                 f"level {level}, seed {seed}"
+                                 + (" (the reference: nothing to compare with yet)"
+                                    if partial else ""))
         first_ref = by_key[(ref, plan.load_levels[0], plan.seeds[0])]
         length_ref, block_ref = first_ref.length_m, first_ref.block_s
 
@@ -261,25 +291,28 @@ class StudyResult:
             return [by_key[(k, level, s)].value(quantity, length_ref, block_ref)
                     for s in plan.seeds]
 
-        def slopes(k: int) -> list[float]:
+        def level_values(k: int, quantity: str) -> list[float]:
+            """Per seed: the slope a of the log fit, or E(last level) / E(first level)."""
             if len(plan.load_levels) < 2:
                 return []
             out = []
             for s in plan.seeds:
                 energies = [by_key[(k, level, s)].energy for level in plan.load_levels]
-                out.append(log_fit(plan.load_levels, per_unit(energies)).a)
+                out.append(log_fit(plan.load_levels, per_unit(energies)).a
+                           if quantity == "slope_a" else energies[-1] / energies[0])
             return out
 
-        ref_slopes = slopes(ref)
         rows = []
-        for k, setting in enumerate(plan.settings):
-            slope = (_statistics(slopes(k), ref_slopes, k == ref)
-                     if ref_slopes else _NAN_ERROR)
+        for k in complete:
+            setting = plan.settings[k]
+            across = {q: (_statistics(level_values(k, q), level_values(ref, q), k == ref)
+                          if len(plan.load_levels) > 1 else _NAN_ERROR)
+                      for q in LEVEL_QUANTITIES}
             for level in plan.load_levels:
                 group = [by_key[(k, level, s)] for s in plan.seeds]
                 stats = {q: _statistics(values(k, level, q), values(ref, level, q), k == ref)
-                         for q in ("mean_torque", "energy", "lth_amplitude")}
-                stats["slope_a"] = slope
+                         for q in QUANTITIES if q not in LEVEL_QUANTITIES}
+                stats.update(across)
                 first = group[0]
                 scene = plan.scene(setting, level)
                 paper = pilot_mill(plan.speed_fraction, plan.particles, level, "paper")
@@ -291,12 +324,13 @@ class StudyResult:
                     shear_modulus_ratio=ratio, length_m=first.length_m, seeds=len(group),
                     wall_s=float(np.mean([r.wall_s for r in group])),
                     particle_steps=float(np.mean([r.particle_steps for r in group])),
-                    quantities=stats))
+                    quantities={q: stats[q] for q in QUANTITIES}))
         name = pilot_mill(plan.speed_fraction, plan.particles, plan.load_levels[0]).name
         if len(plan.load_levels) > 1:
             name = f"{name.split('#')[0]} #{', #'.join(str(v) for v in plan.load_levels)}"
         return cls(tuple(rows), plan, run_list, store,
-                   f"{name}, {len(plan.seeds)} seeds, {plan.speed_fraction:g} of critical speed")
+                   f"{name}, {len(plan.seeds)} seeds, {plan.speed_fraction:g} of critical speed",
+                   tuple(pending))
 
     # -- queries -------------------------------------------------------------------------------
     @property
@@ -459,7 +493,10 @@ class StudyResult:
         except FileNotFoundError:
             raise ValueError(f"{source}: no such study table") from None
         reader = csv.DictReader(io.StringIO(text))
-        missing = [c for c in _csv_columns() if c not in (reader.fieldnames or [])]
+        # Quantities added after a table was written read as nan; everything else must be there.
+        optional = {c for q in LEVEL_QUANTITIES for c in _quantity_columns(q)}
+        missing = [c for c in _csv_columns()
+                   if c not in (reader.fieldnames or []) and c not in optional]
         if missing:
             raise ValueError(f"{source}: not a millscope study table; missing columns "
                              f"{missing}")
@@ -471,7 +508,8 @@ class StudyResult:
                     knobs[k] = float(knobs[k])
                 g = _float(knobs["shear_modulus_factor"])
                 knobs["shear_modulus_factor"] = None if math.isnan(g) else g
-                quantities = {q: QuantityError(*(_float(line[c]) for c in _quantity_columns(q)))
+                quantities = {q: QuantityError(*(_float(line.get(c) or "")
+                                                 for c in _quantity_columns(q)))
                               for q in QUANTITIES}
                 rows.append(StudyRow(
                     setting=Setting(**knobs), reference=line["reference"] == "1",
@@ -488,18 +526,19 @@ class StudyResult:
             raise ValueError(f"{source}: no row is marked as the reference")
         return cls(tuple(rows), description=description)
 
-    def to_markdown(self, pareto_quantity: str = "energy") -> str:
+    def to_markdown(self, pareto_quantity: str = "energy", cost: str = "wall_s") -> str:
         """The table in Markdown: per row the setting, its cost, and per quantity the error of
         the seed mean with the seed spread of one run, ``+3.1 % ± 2.0 %``; the reference row
         gives its seed means instead. Settings on the Pareto front of ``pareto_quantity``
-        (cost: wall time) are marked with a ◆.
+        against ``cost`` (``"wall_s"`` or ``"particle_steps"``) are marked with a ◆.
         """
-        front = set(self.pareto(pareto_quantity))
+        front = set(self.pareto(pareto_quantity, cost))
         shown = [q for q in QUANTITIES
                  if any(math.isfinite(r.quantities[q].error) for r in self.rows)]
         multi = len({r.load_level for r in self.rows}) > 1
         names = {"mean_torque": "mean torque", "energy": "energy",
-                 "lth_amplitude": "LTH amplitude", "slope_a": "slope a"}
+                 "lth_amplitude": "LTH amplitude", "slope_a": "slope a",
+                 "energy_ratio": "per-unit energy"}
         head = ["setting", *(["level"] if multi else []), "dt (s)", "G / paper's",
                 "wall s / run", "particle-steps / run", *(names[q] for q in shown)]
         lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -532,8 +571,20 @@ class StudyResult:
             "Torques are compared per length of drum and energies per length of drum and of "
             "block (see millscope.studies). Wall time: one run (engine set-up, filling, "
             "settling, warm-up and block) on the plan's engine threads. ◆: on the Pareto front "
-            f"of wall time against the {names[pareto_quantity]} error.",
+            f"of {'wall time' if cost == 'wall_s' else 'particle-steps'} against the "
+            f"{names[pareto_quantity]} error.",
         ]
+        ref_ratio = ref_row.quantities["energy_ratio"]
+        if math.isfinite(ref_ratio.spread):
+            seeds = ref_row.seeds
+            se = ref_ratio.spread / math.sqrt(seeds)
+            need = math.ceil(seeds * (se / 0.05) ** 2)
+            notes += ["", f"Per-unit energy of the reference: {ref_ratio.mean:.4g}, standard "
+                      f"error {100 * se:.1f} % from {seeds} seeds; a 5 % standard error needs "
+                      f"{max(need, 2)} seeds" + (" (met)." if se <= 0.05 else ".")]
+        if self.pending:
+            notes += ["", "Not finished yet (left out): "
+                      + "; ".join(s.label for s in self.pending) + "."]
         return "\n".join(notes) + "\n"
 
 

@@ -747,7 +747,8 @@ def plot_energy_fits(groups: Mapping[str, tuple[ArrayLike, ArrayLike, LogFit | N
 
 # -- error against run time (millscope.studies) ---------------------------------------------
 _QUANTITY_NAMES = {"mean_torque": "mean torque", "energy": "spectral energy",
-                   "lth_amplitude": "LTH amplitude", "slope_a": "log-fit slope a"}
+                   "lth_amplitude": "LTH amplitude", "slope_a": "log-fit slope a",
+                   "energy_ratio": "per-unit energy E(last level) / E(first)"}
 _COST_NAMES = {"wall_s": "wall-clock time per run (s)", "particle_steps": "particle-steps per run"}
 
 
@@ -781,7 +782,7 @@ def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = 
     Parameters
     ----------
     result : StudyResult
-    quantity : {"mean_torque", "energy", "lth_amplitude", "slope_a"}
+    quantity : {"mean_torque", "energy", "lth_amplitude", "slope_a", "energy_ratio"}
     cost : {"wall_s", "particle_steps"}
         The x axis (log scale).
     ax : Axes, optional
