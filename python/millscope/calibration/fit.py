@@ -264,9 +264,7 @@ class Calibration:
     @classmethod
     def _from_group(cls, group: GroupAnalysis, *, stacklevel: int) -> Calibration:
         g = group
-        if g.fit is None:
-            raise ValueError(f"group {g.name} has a single load level ({g.levels[0]:g}); a "
-                             "calibration needs at least 2")
+        fit = g.log_fit  # ValueError for a group with a single load level
         nyquist = {0.5 * r.record.sample_rate_hz for r in g.results if r.record is not None}
         band = min(nyquist) if nyquist else None
         meta = {
@@ -280,13 +278,13 @@ class Calibration:
             "interval_source": list(g.interval_source),
             "cases": [r.hash for r in g.results],
         }
-        calibration = cls(fit=g.fit, reference_energy=float(g.energy.max()), lifters=g.lifters,
+        calibration = cls(fit=fit, reference_energy=float(g.energy.max()), lifters=g.lifters,
                           rotation_hz=g.rotation_hz, block_s=g.settings.block_s,
                           bandwidth=g.settings.bandwidth, window=g.settings.window,
                           label=g.name, meta=meta, band_hz=band,
                           block_relative_std=g.block_relative_std())
         if not calibration.gives_intervals:
-            warnings.warn(f"calibration of group {g.name}: {no_interval_reason(g.fit)}; its "
+            warnings.warn(f"calibration of group {g.name}: {no_interval_reason(fit)}; its "
                           "estimates will have no interval (nan)", NoIntervalWarning,
                           stacklevel=stacklevel)
         return calibration

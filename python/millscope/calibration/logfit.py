@@ -184,4 +184,5 @@ def per_unit(energies: ArrayLike) -> NDArray[np.float64]:
     if (e.size == 0 or e.ndim > 2 or not np.all(np.isfinite(e))
             or np.any(e.max(axis=-1) <= 0)):
         raise ValueError(f"energies must be finite with a positive maximum; got {e.tolist()}")
-    return e / e.max(axis=-1, keepdims=True)
+    pu: NDArray[np.float64] = e / e.max(axis=-1, keepdims=True)
+    return pu

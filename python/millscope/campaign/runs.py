@@ -214,7 +214,7 @@ class Campaign:
         digests = sorted(stored, key=lambda d: (rank.get(d, len(rank)), d))
         cases = [Case.from_dict(stored[d][2]["case"]) for d in digests]
         if block is None and saved is not None:
-            block = tuple(saved["block"])  # type: ignore[assignment]
+            block = tuple(saved["block"])
         defaults = saved or {"bandwidth": 0.3, "window": "hann"}
         return cls(cases, path, block=block,
                    bandwidth=defaults["bandwidth"] if bandwidth is None else bandwidth,

@@ -223,7 +223,7 @@ class Simulation:
         """Time since the start of rotation, s (0 before it)."""
         if self._phase != "rotating":
             return 0.0
-        return (self._engine.step_count - self._engine.rotation_start_step) * self.dt
+        return float((self._engine.step_count - self._engine.rotation_start_step) * self.dt)
 
     @property
     def drum_angle(self) -> float:
@@ -464,7 +464,9 @@ class Simulation:
         }
         path = Path(path)
         with atomic_write(path, "wb") as f:
-            np.savez(f, meta_json=np.array(json.dumps(meta)), **arrays)
+            # allow_pickle=False: the snapshot holds numeric arrays only (and no array key can
+            # take the place of the keyword)
+            np.savez(f, allow_pickle=False, meta_json=np.array(json.dumps(meta)), **arrays)
         return path
 
     @classmethod
@@ -622,7 +624,7 @@ def threads_range() -> str:
 
 
 def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
-                 track_energy: bool) -> Any:
+                 track_energy: bool) -> _core.Engine:
     drum = scene.drum
     lifters = drum.lifters
     geometry_args: dict[str, Any] = {

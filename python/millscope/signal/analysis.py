@@ -236,5 +236,5 @@ def sub_block_energies(block: TorqueRecord, *, lth_hz: float | None, sub_blocks:
     t, x = block.time_s, block.torque_Nm
     return np.array([
         spectral_energy(TorqueRecord(t[k * size:(k + 1) * size], x[k * size:(k + 1) * size]),
-                        remove, bandwidth=bandwidth, window=window).energy  # type: ignore[arg-type]
+                        remove, bandwidth=bandwidth, window=window).energy
         for k in range(m)])
