@@ -221,7 +221,7 @@ def test_a_groups_log_fit_is_its_fit_or_a_clear_error(campaign_results) -> None:
     assert single.fit is None
     with pytest.raises(ValueError, match=r"group LDMS has a single load level \(2\); a fit "
                                          r"needs at least 2"):
-        single.log_fit
+        _ = single.log_fit
 
 
 def test_a_two_level_calibration_warns_and_so_does_each_estimate_without_interval() -> None:

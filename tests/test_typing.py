@@ -20,7 +20,6 @@ import sys
 from pathlib import Path
 from types import ModuleType
 
-import pytest
 from mypy import api as mypy_api
 
 from millscope import _core

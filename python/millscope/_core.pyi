@@ -189,8 +189,8 @@ def contact_probe(material_a: Material, material_b: Material, wall: bool, radius
                   tangential_speed: float, spin: float, dt: float,
                   clamp_normal: bool) -> ProbeResult: ...
 def sphere_contact(constants: PairConstants, x_i: _Vec3, v_i: _Vec3, w_i: _Vec3, radius_i: float,
-                   mass_i: float, x_j: _Vec3, v_j: _Vec3, w_j: _Vec3, radius_j: float, mass_j: float,
-                   history: list[float], dt: float, friction: bool = True,
+                   mass_i: float, x_j: _Vec3, v_j: _Vec3, w_j: _Vec3, radius_j: float,
+                   mass_j: float, history: list[float], dt: float, friction: bool = True,
                    clamp_normal: bool = False) -> ContactEvaluation: ...
 def wall_contact(constants: PairConstants, x_i: _Vec3, v_i: _Vec3, w_i: _Vec3, radius_i: float,
                  mass_i: float, normal: _Vec3, overlap: float, wall_velocity: _Vec3,
