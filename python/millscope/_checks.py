@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -20,6 +20,8 @@ __all__ = ["MAX_LIFTERS", "as_float", "between", "choice", "count", "fail", "fla
 
 #: The most lifter bars a drum may have (a bar every 3 mm of the shell of a 10 m drum); here,
 #: below both the scene (model) and the spectra (signal), which check it.
+_Choice = TypeVar("_Choice", bound=str)
+
 MAX_LIFTERS = 10_000
 
 
@@ -188,10 +190,13 @@ def text(where: str, value: object, *, empty: bool = False) -> str:
     return value
 
 
-def choice(where: str, value: object, choices: tuple[str, ...]) -> str:
-    if not isinstance(value, str) or value not in choices:
-        raise fail(where, value, f"one of {', '.join(repr(c) for c in choices)}")
-    return value
+def choice(where: str, value: object, choices: tuple[_Choice, ...]) -> _Choice:
+    """``value`` when it is one of ``choices`` (typed as they are, e.g. a Literal), else the
+    error naming ``where``, the value and the choices."""
+    for c in choices:
+        if isinstance(value, str) and value == c:
+            return c
+    raise fail(where, value, f"one of {', '.join(repr(c) for c in choices)}")
 
 
 def tuple_of(where: str, value: object, kind: type, what: str) -> tuple[Any, ...]:

@@ -39,7 +39,7 @@ from .. import _checks
 from .._files import MAX_JSON_BYTES, atomic_write, read_json
 from ..signal.analysis import WINDOWS, analyze_block, check_bandwidth
 from ..signal.record import TorqueRecord
-from ..signal.spectral import MAX_LIFTERS, RemoveItem, lifter_harmonic_hz
+from ..signal.spectral import MAX_LIFTERS, RemoveItem, WindowName, lifter_harmonic_hz
 from .groups import GroupAnalysis, analyze_campaign
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 
@@ -135,7 +135,7 @@ class Calibration:
     rotation_hz: float
     block_s: float
     bandwidth: float = 0.3
-    window: str = "hann"
+    window: WindowName = "hann"
     extra_lines_hz: tuple[float, ...] = ()
     label: str = ""
     meta: dict[str, Any] = field(default_factory=dict)
@@ -493,7 +493,7 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
                          f"{nyquist:g} Hz; it needs at least {2 * cal.band_hz:g} Hz")
     analysis = analyze_block(record, lifters=cal.lifters, rotation_hz=cal.rotation_hz,
                              lines_hz=[*cal.extra_lines_hz, *lines_hz],
-                             window=cal.window,  # type: ignore[arg-type]  # checked at run time
+                             window=cal.window,
                              bandwidth=cal.bandwidth,
                              band_hz=None if cal.band_hz is None else (0.0, cal.band_hz))
     e = analysis.energy

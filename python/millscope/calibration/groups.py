@@ -276,7 +276,7 @@ def _level_spread(repeats: list[CaseResult], settings: AnalysisSettings, sub_blo
     assert case.record is not None
     parts = sub_block_energies(case.record.block(*settings.block), lth_hz=case.lth_hz,
                                sub_blocks=sub_blocks, bandwidth=settings.bandwidth,
-                               window=settings.window)  # type: ignore[arg-type]
+                               window=settings.window)
     if parts is None or not np.all(parts > 0):
         return "none", None, math.nan
     spread = _sub_block_spread(parts)

@@ -13,9 +13,10 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from numbers import Integral
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 from .. import _checks
+from ..engine.simulation import Sampling
 from ..model.presets import CaseKey, case_key, paper_cases
 from ..model.scene import Scene
 from ..model.stiffness import time_step_limit
@@ -34,7 +35,7 @@ __all__ = [
 ]
 
 CASE_FORMAT = "millscope-case-1"  # part of every case hash: bump it when results change meaning
-SAMPLINGS = ("instant", "mean")
+SAMPLINGS: tuple[Sampling, ...] = get_args(Sampling)
 _MIN_BLOCK_SAMPLES = 4  # the spectral analysis needs at least this many
 Status = Literal["done", "failed", "pending"]
 
@@ -82,7 +83,7 @@ class RunSettings:
     duration_s: float = 14.0
     warm_up_s: float = 0.0
     sample_dt: float = 0.01
-    sampling: str = "instant"
+    sampling: Sampling = "instant"
     threads: int = 1
     dt: float | None = None
     settle_tolerance: float = 1e-4

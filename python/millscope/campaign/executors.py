@@ -119,7 +119,7 @@ def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
                          settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
                          settle_max_s=s.settle_max_s, track_energy=False)
         rec = sim.run(s.total_samples * s.sample_dt, sample_dt=s.sample_dt,
-                      sampling=s.sampling,  # type: ignore[arg-type]  # checked by RunSettings
+                      sampling=s.sampling,
                       progress=False)
         if rec.meta.get("interrupted") or len(rec) != s.total_samples:
             raise RuntimeError(f"the run was interrupted after {len(rec)} of "

@@ -52,8 +52,9 @@ from .. import _checks, _core
 from .._files import atomic_write
 from ..engine.simulation import _available_cores
 from ..model.scene import Scene
-from ..signal.analysis import AnalysisSettings
+from ..signal.analysis import WINDOWS, AnalysisSettings
 from ..signal.record import TorqueRecord
+from ..signal.spectral import WindowName
 from .cases import _MIN_BLOCK_SAMPLES, CASE_FORMAT, Case, CaseResult, RunSettings, _seeds
 from .executors import (
     _completed,
@@ -124,7 +125,7 @@ class Campaign:
                  block: tuple[float, float] | None = (4.0, 14.0),
                  seeds: int | Iterable[int] | None = None,
                  settings: RunSettings | None = None, bandwidth: float = 0.3,
-                 window: str = "hann") -> None:
+                 window: WindowName = "hann") -> None:
         if settings is not None and not isinstance(settings, RunSettings):
             raise _checks.fail("settings", settings, "a RunSettings or None")
         base = settings or RunSettings()
@@ -158,7 +159,7 @@ class Campaign:
             raise _checks.fail("store", str(store), "a directory (or a path to create one)")
         self._store = path
         self._bandwidth = _checks.positive("bandwidth", bandwidth, "Hz")
-        self._window = _checks.choice("window", window, ("hann", "hann_periodic", "rectangular"))
+        self._window = _checks.choice("window", window, WINDOWS)
         self._block = None if block is None else self._check_block(block)
         self._analysis = (None if self._block is None
                           else AnalysisSettings(self._block, self._bandwidth, self._window))
@@ -166,7 +167,7 @@ class Campaign:
     @classmethod
     def from_store(cls, store: str | os.PathLike[str], *,
                    block: tuple[float, float] | None = None, bandwidth: float | None = None,
-                   window: str | None = None) -> Campaign:
+                   window: WindowName | None = None) -> Campaign:
         """The campaign of the cases a store holds, to read their results without the scenes.
 
         Every case with a file in the store (finished or failed) is taken, in the manifest's

@@ -114,11 +114,12 @@ def _case_files(store: Path) -> Iterator[tuple[Status, Path]]:
     """Every case file in ``store/cases`` (not the temporaries of unfinished writes):
     failures first, so that a finished case's file wins over a failure of the same case."""
     folder = store / "cases"
+    patterns: tuple[tuple[Status, str], ...] = (("failed", "*.failed.json"), ("done", "*.npz"))
     if folder.is_dir():
-        for status, pattern in (("failed", "*.failed.json"), ("done", "*.npz")):
+        for status, pattern in patterns:
             for path in sorted(folder.glob(pattern)):
                 if not path.name.startswith("."):
-                    yield status, path  # type: ignore[misc]
+                    yield status, path
 
 
 def _stored(store: Path) -> dict[str, tuple[Status, Path, dict[str, Any]]]:

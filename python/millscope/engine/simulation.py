@@ -56,7 +56,11 @@ from ..model.stiffness import time_step_limit, upper_impact_speed
 from ..signal.record import TorqueRecord
 from . import checkpoint as _checkpoint
 
-__all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation", "check_threads"]
+__all__ = ["CheckpointError", "Sampling", "SettleReport", "SettleWarning", "Simulation",
+           "check_threads"]
+
+#: how a torque sample is taken: the value at its instant, or the mean over its interval
+Sampling = Literal["instant", "mean"]
 
 CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"; 3: "order"
 _FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
@@ -335,7 +339,7 @@ class Simulation:
 
     # -- running -----------------------------------------------------------------------------
     def run(self, duration: float, sample_dt: float = 0.01,
-            sampling: Literal["instant", "mean"] = "instant", *,
+            sampling: Sampling = "instant", *,
             progress: bool = True) -> TorqueRecord:
         """Runs the rotating mill for ``duration`` s and returns its drive torque.
 

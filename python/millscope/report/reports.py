@@ -107,7 +107,7 @@ def _spectra(group: GroupAnalysis
     for r in cases:
         assert r.record is not None
         spectra.append(spectrum(r.record.block(*group.settings.block),
-                                window=group.settings.window))  # type: ignore[arg-type]
+                                window=group.settings.window))
     labels = [r.scene.name.replace("#", "") for r in cases]
     marks = [r.lth_hz if math.isfinite(r.lth_hz) else None for r in cases]
     return spectra, labels, marks, [r.lth_distinct for r in cases]

@@ -40,7 +40,7 @@ from .spectral import (
 __all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block", "check_bandwidth",
            "sub_block_energies"]
 
-WINDOWS: tuple[str, ...] = get_args(WindowName)  # the windows spectral knows
+WINDOWS: tuple[WindowName, ...] = get_args(WindowName)  # the windows spectral knows
 MIN_SUB_BLOCK_SAMPLES = 32  # a sub-block of fewer samples loses most of its band to the removal
 MIN_SUB_BLOCKS = 3  # fewer sub-blocks give no usable spread
 
@@ -155,7 +155,7 @@ class AnalysisSettings:
 
     block: tuple[float, float]
     bandwidth: float = 0.3
-    window: str = "hann"
+    window: WindowName = "hann"
 
     def __post_init__(self) -> None:
         try:
