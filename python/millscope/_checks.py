@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
-from typing import Any, TypeVar
+from typing import Any, TypeGuard, TypeVar
 
 import numpy as np
 
@@ -25,7 +25,7 @@ _Choice = TypeVar("_Choice", bound=str)
 MAX_LIFTERS = 10_000
 
 
-def _is_number(value: object) -> bool:
+def _is_number(value: object) -> TypeGuard[Real]:
     return isinstance(value, Real) and not isinstance(value, bool)
 
 
@@ -35,7 +35,7 @@ def as_float(value: object) -> float:
     if not _is_number(value):
         return math.nan
     try:
-        return float(value)  # type: ignore[arg-type]
+        return float(value)
     except OverflowError:
         return math.inf
 
@@ -43,12 +43,12 @@ def as_float(value: object) -> float:
 def show(value: object) -> str:
     """A value as error messages print it: numbers plainly (no ``np.float64(...)``), long
     values cut short."""
-    if isinstance(value, Integral) and _is_number(value):
+    if _is_number(value) and isinstance(value, Integral):
         n = int(value)
         text = str(n) if abs(n) < 10**30 else \
             f"{'-' if n < 0 else ''}~1e{int(abs(n).bit_length() * math.log10(2))}"
     elif _is_number(value):
-        text = repr(float(value))  # type: ignore[arg-type]
+        text = repr(float(value))
     else:
         text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
@@ -99,9 +99,8 @@ def integer(where: str, value: object, error: type[ValueError], *, low: int,
             high: int | None = None, why: str = "") -> int:
     """``value`` as an int when it is an integer (not a bool, not a float) in [low, high],
     else ``error``."""
-    ok = isinstance(value, Integral) and _is_number(value)
-    n = int(value) if ok else 0  # type: ignore[call-overload]
-    if not ok or n < low or (high is not None and n > high):
+    n = int(value) if _is_number(value) and isinstance(value, Integral) else None
+    if n is None or n < low or (high is not None and n > high):
         valid = f">= {low}" if high is None else f"in [{low}, {high}]"
         reason = f" ({why})" if why else ""
         raise error(f"{where} = {show(value)} is not valid; it must be an integer "

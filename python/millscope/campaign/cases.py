@@ -187,7 +187,7 @@ class Case:
                 "settings": dataclasses.asdict(self.settings)}
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Case:
+    def from_dict(cls, data: object) -> Case:
         """The case of a :meth:`to_dict` dict, validated (ValueError when damaged)."""
         if not isinstance(data, Mapping) or data.get("format") != CASE_FORMAT:
             found = data.get("format") if isinstance(data, Mapping) else type(data).__name__
@@ -199,7 +199,7 @@ class Case:
         unknown = sorted(set(settings) - known)
         if unknown:
             raise ValueError(f"case settings have unknown keys {unknown}; known: {sorted(known)}")
-        return cls(Scene.from_dict(data.get("scene")), RunSettings(**settings))  # type: ignore[arg-type]
+        return cls(Scene.from_dict(data.get("scene")), RunSettings(**settings))
 
     def canonical_json(self) -> str:
         """The JSON the hash is taken of: sorted keys, no spaces, floats as Python repr."""
