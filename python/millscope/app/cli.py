@@ -26,7 +26,7 @@ from .. import __version__
 from .._frames import FORMATS
 
 if TYPE_CHECKING:
-    from pandas import DataFrame  # type: ignore[import-untyped]
+    from pandas import DataFrame
 
 EXIT_BAD_INPUT = 2
 T = TypeVar("T")

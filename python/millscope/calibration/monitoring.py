@@ -39,7 +39,7 @@ from .fit import (
 )
 
 if TYPE_CHECKING:
-    from pandas import DataFrame  # type: ignore[import-untyped]
+    from pandas import DataFrame
 
 __all__ = ["MissingBandWarning", "MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
 

@@ -13,9 +13,10 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from numbers import Integral
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 from .. import _checks
+from ..engine.simulation import Sampling
 from ..model.presets import CaseKey, case_key, paper_cases
 from ..model.scene import Scene
 from ..model.stiffness import time_step_limit
@@ -34,7 +35,7 @@ __all__ = [
 ]
 
 CASE_FORMAT = "millscope-case-1"  # part of every case hash: bump it when results change meaning
-SAMPLINGS = ("instant", "mean")
+SAMPLINGS: tuple[Sampling, ...] = get_args(Sampling)
 _MIN_BLOCK_SAMPLES = 4  # the spectral analysis needs at least this many
 Status = Literal["done", "failed", "pending"]
 
@@ -82,7 +83,7 @@ class RunSettings:
     duration_s: float = 14.0
     warm_up_s: float = 0.0
     sample_dt: float = 0.01
-    sampling: str = "instant"
+    sampling: Sampling = "instant"
     threads: int = 1
     dt: float | None = None
     settle_tolerance: float = 1e-4
@@ -186,7 +187,7 @@ class Case:
                 "settings": dataclasses.asdict(self.settings)}
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Case:
+    def from_dict(cls, data: object) -> Case:
         """The case of a :meth:`to_dict` dict, validated (ValueError when damaged)."""
         if not isinstance(data, Mapping) or data.get("format") != CASE_FORMAT:
             found = data.get("format") if isinstance(data, Mapping) else type(data).__name__
@@ -198,7 +199,7 @@ class Case:
         unknown = sorted(set(settings) - known)
         if unknown:
             raise ValueError(f"case settings have unknown keys {unknown}; known: {sorted(known)}")
-        return cls(Scene.from_dict(data.get("scene")), RunSettings(**settings))  # type: ignore[arg-type]
+        return cls(Scene.from_dict(data.get("scene")), RunSettings(**settings))
 
     def canonical_json(self) -> str:
         """The JSON the hash is taken of: sorted keys, no spaces, floats as Python repr."""

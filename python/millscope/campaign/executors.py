@@ -118,7 +118,7 @@ def simulate_case(case: Case, *, track_energy: bool = False,
                      settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
                      settle_max_s=s.settle_max_s, track_energy=track_energy)
     rec = sim.run(s.total_samples * s.sample_dt, sample_dt=s.sample_dt,
-                  sampling=s.sampling,  # type: ignore[arg-type]  # checked by RunSettings
+                  sampling=s.sampling,
                   progress=progress)
     return sim, rec
 

@@ -53,8 +53,9 @@ from .._files import atomic_write
 from .._frames import frame
 from ..engine.simulation import _available_cores
 from ..model.scene import Scene
-from ..signal.analysis import AnalysisSettings
+from ..signal.analysis import WINDOWS, AnalysisSettings
 from ..signal.record import TorqueRecord
+from ..signal.spectral import WindowName
 from .cases import _MIN_BLOCK_SAMPLES, CASE_FORMAT, Case, CaseResult, RunSettings, _seeds
 from .executors import (
     _completed,
@@ -83,7 +84,7 @@ from .store import (
 from .tables import CASE_COLUMNS, CaseResults, case_row, unlisted_rows
 
 if TYPE_CHECKING:
-    from pandas import DataFrame  # type: ignore[import-untyped]
+    from pandas import DataFrame
 
 __all__ = ["Campaign", "read_store"]
 
@@ -129,7 +130,7 @@ class Campaign:
                  block: tuple[float, float] | None = (4.0, 14.0),
                  seeds: int | Iterable[int] | None = None,
                  settings: RunSettings | None = None, bandwidth: float = 0.3,
-                 window: str = "hann") -> None:
+                 window: WindowName = "hann") -> None:
         if settings is not None and not isinstance(settings, RunSettings):
             raise _checks.fail("settings", settings, "a RunSettings or None")
         base = settings or RunSettings()
@@ -163,7 +164,7 @@ class Campaign:
             raise _checks.fail("store", str(store), "a directory (or a path to create one)")
         self._store = path
         self._bandwidth = _checks.positive("bandwidth", bandwidth, "Hz")
-        self._window = _checks.choice("window", window, ("hann", "hann_periodic", "rectangular"))
+        self._window = _checks.choice("window", window, WINDOWS)
         self._block = None if block is None else self._check_block(block)
         self._analysis = (None if self._block is None
                           else AnalysisSettings(self._block, self._bandwidth, self._window))
@@ -171,7 +172,7 @@ class Campaign:
     @classmethod
     def from_store(cls, store: str | os.PathLike[str], *,
                    block: tuple[float, float] | None = None, bandwidth: float | None = None,
-                   window: str | None = None) -> Campaign:
+                   window: WindowName | None = None) -> Campaign:
         """The campaign of the cases a store holds, to read their results without the scenes.
 
         Every case with a file in the store (finished or failed) is taken, in the manifest's
@@ -219,7 +220,7 @@ class Campaign:
         digests = sorted(stored, key=lambda d: (rank.get(d, len(rank)), d))
         cases = [Case.from_dict(stored[d][2]["case"]) for d in digests]
         if block is None and saved is not None:
-            block = tuple(saved["block"])  # type: ignore[assignment]
+            block = tuple(saved["block"])
         defaults = saved or {"bandwidth": 0.3, "window": "hann"}
         return cls(cases, path, block=block,
                    bandwidth=defaults["bandwidth"] if bandwidth is None else bandwidth,
@@ -490,7 +491,7 @@ class Campaign:
 
 
 def read_store(store: str | os.PathLike[str], *, block: tuple[float, float] | None = None,
-               bandwidth: float | None = None, window: str | None = None) -> DataFrame:
+               bandwidth: float | None = None, window: WindowName | None = None) -> DataFrame:
     """Every case a campaign store holds as one table (a pandas DataFrame), nothing run.
 
     The rows of :meth:`CaseResults.to_frame` for the store's cases

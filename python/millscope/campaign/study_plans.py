@@ -15,11 +15,12 @@ from typing import Any
 import numpy as np
 
 from .. import _checks
+from ..engine.simulation import Sampling
 from ..model.contact import MAX_DT_FRACTION
 from ..model.presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
 from ..model.scene import Scene
 from ..signal.analysis import WINDOWS
-from ..signal.spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
+from ..signal.spectral import LTH_CLEAR_BINS, WindowName, lifter_harmonic_hz
 from .cases import MAX_DURATION_S, SAMPLINGS, Case, RunSettings
 
 __all__ = ["COSTS", "KNOBS", "LEVEL_QUANTITIES", "QUANTITIES", "Setting", "StudyPlan"]
@@ -76,7 +77,7 @@ class Setting:
     shear_modulus_factor: float | None = None
     record_s: float = 4.0
     warm_up_s: float = 2.0
-    sampling: str = "instant"
+    sampling: Sampling = "instant"
     scale: str = "tiny"
 
     def __post_init__(self) -> None:
@@ -196,7 +197,7 @@ class StudyPlan:
     sample_dt: float = 0.01
     threads: int = 1
     bandwidth: float = 0.3
-    window: str = "hann"
+    window: WindowName = "hann"
     _cases: tuple[tuple[int, int, int, Case], ...] = field(init=False, repr=False,
                                                            compare=False)
     _donors: tuple[int | None, ...] = field(init=False, repr=False, compare=False)
@@ -244,7 +245,7 @@ class StudyPlan:
             "load_levels": levels,
             "sample_dt": _checks.positive("StudyPlan.sample_dt", self.sample_dt, "s"),
             "bandwidth": _checks.positive("StudyPlan.bandwidth", self.bandwidth, "Hz"),
-            "window": _checks.choice("StudyPlan.window", self.window, tuple(WINDOWS)),
+            "window": _checks.choice("StudyPlan.window", self.window, WINDOWS),
         }
         if (not isinstance(self.threads, Integral) or isinstance(self.threads, bool)
                 or self.threads < 1):

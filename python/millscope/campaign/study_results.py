@@ -27,7 +27,7 @@ from ..signal.record import TorqueRecord
 from .study_plans import COSTS, KNOBS, LEVEL_QUANTITIES, QUANTITIES, Setting, StudyPlan
 
 if TYPE_CHECKING:
-    from pandas import DataFrame  # type: ignore[import-untyped]
+    from pandas import DataFrame
 
 __all__ = ["QuantityError", "SettingSummary", "StudyResult", "StudyRow", "StudyRun"]
 

@@ -15,7 +15,7 @@ from .cases import CaseResult
 from .store import read_manifest, unreadable_cases
 
 if TYPE_CHECKING:
-    from pandas import DataFrame  # type: ignore[import-untyped]
+    from pandas import DataFrame
 
 __all__ = ["CASE_COLUMNS", "CaseResults"]
 

@@ -58,7 +58,11 @@ from ..signal.record import TorqueRecord
 from . import checkpoint as _checkpoint
 from .snapshots import ChargeSnapshot, VtkSeries, check_folder
 
-__all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation", "check_threads"]
+__all__ = ["CheckpointError", "Sampling", "SettleReport", "SettleWarning", "Simulation",
+           "check_threads"]
+
+#: how a torque sample is taken: the value at its instant, or the mean over its interval
+Sampling = Literal["instant", "mean"]
 
 CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"; 3: "order"
 _FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
@@ -227,7 +231,7 @@ class Simulation:
         """Time since the start of rotation, s (0 before it)."""
         if self._phase != "rotating":
             return 0.0
-        return (self._engine.step_count - self._engine.rotation_start_step) * self.dt
+        return float((self._engine.step_count - self._engine.rotation_start_step) * self.dt)
 
     @property
     def drum_angle(self) -> float:
@@ -374,7 +378,7 @@ class Simulation:
 
     # -- running -----------------------------------------------------------------------------
     def run(self, duration: float, sample_dt: float = 0.01,
-            sampling: Literal["instant", "mean"] = "instant", *,
+            sampling: Sampling = "instant", *,
             progress: bool = True, snapshot_every: int | None = None,
             snapshot_dir: str | os.PathLike[str] | None = None) -> TorqueRecord:
         """Runs the rotating mill for ``duration`` s and returns its drive torque.
@@ -545,7 +549,9 @@ class Simulation:
         }
         path = Path(path)
         with atomic_write(path, "wb") as f:
-            np.savez(f, meta_json=np.array(json.dumps(meta)), **arrays)
+            # allow_pickle=False: the snapshot holds numeric arrays only (and no array key can
+            # take the place of the keyword)
+            np.savez(f, allow_pickle=False, meta_json=np.array(json.dumps(meta)), **arrays)
         return path
 
     @classmethod
@@ -703,7 +709,7 @@ def threads_range() -> str:
 
 
 def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
-                 track_energy: bool) -> Any:
+                 track_energy: bool) -> _core.Engine:
     drum = scene.drum
     lifters = drum.lifters
     geometry_args: dict[str, Any] = {

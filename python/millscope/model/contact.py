@@ -79,7 +79,7 @@ def _number(value: object, name: str) -> float:
             value = float(value)  # type: ignore[arg-type]  # numpy scalars and the like
         except (TypeError, ValueError):
             raise ValueError(f"{name} = {value!r} is not valid; it must be a number") from None
-    return float(value)  # type: ignore[arg-type]
+    return float(value)
 
 
 def _positive(value: object, name: str, unit: str) -> float:

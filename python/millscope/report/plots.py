@@ -116,7 +116,7 @@ def _line(item: LineSpec) -> tuple[str, float]:
         return str(name), float(freq)
     if hasattr(item, "frequency_hz"):
         return str(getattr(item, "name", "")), float(item.frequency_hz)
-    return "", float(item)  # type: ignore[arg-type]
+    return "", float(item)
 
 
 def _set_title(ax: Axes, title: str | None, default: str, made: bool) -> None:

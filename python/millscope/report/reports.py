@@ -41,7 +41,7 @@ from ..campaign.runs import Campaign
 from ..campaign.store import UnreadableCase, _listing, unreadable_cases
 from ..campaign.studies import StudyResult
 from ..model.presets import case_key
-from ..signal.spectral import PEAK_DISTINCT_RATIO, spectrum
+from ..signal.spectral import PEAK_DISTINCT_RATIO, Spectrum, spectrum
 from . import plots
 
 __all__ = ["UnreadableCasesError", "calibration_file_name", "write_report", "write_study"]
@@ -102,13 +102,13 @@ def _first_per_level(group: GroupAnalysis) -> list[CaseResult]:
 
 
 def _spectra(group: GroupAnalysis
-             ) -> tuple[list, list[str], list[float | None], list[bool]]:
+             ) -> tuple[list[Spectrum], list[str], list[float | None], list[bool]]:
     cases = _first_per_level(group)
-    spectra = []
+    spectra: list[Spectrum] = []
     for r in cases:
         assert r.record is not None
         spectra.append(spectrum(r.record.block(*group.settings.block),
-                                window=group.settings.window))  # type: ignore[arg-type]
+                                window=group.settings.window))
     labels = [r.scene.name.replace("#", "") for r in cases]
     marks = [r.lth_hz if math.isfinite(r.lth_hz) else None for r in cases]
     return spectra, labels, marks, [r.lth_distinct for r in cases]

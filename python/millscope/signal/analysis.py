@@ -39,12 +39,12 @@ from .spectral import (
 )
 
 if TYPE_CHECKING:
-    from pandas import DataFrame  # type: ignore[import-untyped]
+    from pandas import DataFrame
 
 __all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block", "check_bandwidth",
            "sub_block_energies"]
 
-WINDOWS: tuple[str, ...] = get_args(WindowName)  # the windows spectral knows
+WINDOWS: tuple[WindowName, ...] = get_args(WindowName)  # the windows spectral knows
 MIN_SUB_BLOCK_SAMPLES = 32  # a sub-block of fewer samples loses most of its band to the removal
 MIN_SUB_BLOCKS = 3  # fewer sub-blocks give no usable spread
 
@@ -190,7 +190,7 @@ class AnalysisSettings:
 
     block: tuple[float, float]
     bandwidth: float = 0.3
-    window: str = "hann"
+    window: WindowName = "hann"
 
     def __post_init__(self) -> None:
         try:
@@ -271,5 +271,5 @@ def sub_block_energies(block: TorqueRecord, *, lth_hz: float | None, sub_blocks:
     t, x = block.time_s, block.torque_Nm
     return np.array([
         spectral_energy(TorqueRecord(t[k * size:(k + 1) * size], x[k * size:(k + 1) * size]),
-                        remove, bandwidth=bandwidth, window=window).energy  # type: ignore[arg-type]
+                        remove, bandwidth=bandwidth, window=window).energy
         for k in range(m)])
