@@ -4,8 +4,10 @@ mill-power models, against analytic references and independent numerical integra
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import integrate
 
@@ -18,6 +20,7 @@ from millscope.model.mill_power import (
     morrell_c_power,
     segment_half_angle,
 )
+from millscope.report.power import plot_power_comparison, read_power_table
 from millscope.signal.power import drive_power
 
 R = 0.44  # m, the pilot mill's shell radius
@@ -245,8 +248,8 @@ def test_models_scale_as_d_to_the_2_5_times_length_times_density() -> None:
 
 
 def test_morrell_toe_and_shoulder_trends() -> None:
-    """The empirical shoulder rises with speed (Morrell 1996, Fig. of theta_S) while the toe
-    stays below the horizontal on the falling side; both within their quadrants."""
+    """The shoulder rises with speed (the charge is carried higher, as every observation of
+    tumbling charges shows) while the toe stays below the horizontal on the falling side."""
     low = morrell_c_power(D, L, 0.6, 0.3, 4000.0)
     high = morrell_c_power(D, L, 0.85, 0.3, 4000.0)
     assert high.shoulder_rad > low.shoulder_rad
@@ -271,3 +274,52 @@ def test_model_bad_inputs(kwargs: dict[str, float], message: str) -> None:
         hogg_fuerstenau_power(**args, repose_angle_rad=0.6)
     with pytest.raises(ValueError, match=r"repose_angle_rad = 2.0 rad is not valid"):
         hogg_fuerstenau_power(D, L, 0.7, 0.2, 4000.0, 2.0)
+
+
+# -- the comparison table and figure -------------------------------------------------------------
+
+
+def comparison_table() -> pd.DataFrame:
+    rows = []
+    for case, group in (("balls-{}", "balls"), ("LD{}#2", "LD")):
+        for code, speed in (("LS", 0.62), ("MS", 0.71), ("HS", 0.80)):
+            sim = 800.0 + 300.0 * (speed - 0.62) + (50.0 if group == "LD" else 0.0)
+            rows.append({"case": case.format(code), "speed_fraction": speed,
+                         "stiffness_factor": 0.001, "power_W": sim, "power_se_W": 10.0,
+                         "morrell_power_W": 1.1 * sim, "morrell_diff_pct": 10.0,
+                         "hogg_fuerstenau_power_W": 0.95 * sim,
+                         "hogg_fuerstenau_diff_pct": -5.0})
+    return pd.DataFrame(rows)
+
+
+def test_power_figure_draws_the_table(tmp_path: Path) -> None:
+    path = tmp_path / "power.csv"
+    comparison_table().to_csv(path, index=False)
+    table = read_power_table(path)
+    fig = plot_power_comparison(table)
+    axes = fig.axes
+    assert len(axes) == 4  # two fillings x (power, difference)
+    # the simulated line of the first panel is the table's power, in speed order
+    balls = table[table["case"].str.startswith("balls")].sort_values("speed_fraction")
+    panel = next(ax for ax in axes if ax.get_title().startswith("balls"))
+    line = panel.lines[0]
+    assert np.allclose(line.get_xdata(), 100 * balls["speed_fraction"])
+    assert np.allclose(line.get_ydata(), balls["power_W"])
+    with pytest.raises(ValueError, match="stiffness_factor = 0.5 is not valid"):
+        plot_power_comparison(table, 0.5)
+
+
+def test_power_table_bad_files(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="no such file"):
+        read_power_table(tmp_path / "missing.csv")
+    table = comparison_table()
+    table.drop(columns="power_se_W").to_csv(tmp_path / "a.csv", index=False)
+    with pytest.raises(ValueError, match="missing column power_se_W"):
+        read_power_table(tmp_path / "a.csv")
+    text = table.to_csv(index=False).replace("800.0", "lots", 1)
+    (tmp_path / "b.csv").write_text(text)
+    with pytest.raises(ValueError, match="must hold finite numbers"):
+        read_power_table(tmp_path / "b.csv")
+    (tmp_path / "c.csv").write_bytes(b"\xff\xfe\x00garbage")
+    with pytest.raises(ValueError, match="power table"):
+        read_power_table(tmp_path / "c.csv")
