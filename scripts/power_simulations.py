@@ -22,6 +22,7 @@ import numpy as np
 
 import millscope as ms
 from millscope._files import atomic_write
+from millscope.model.charge import particle_masses
 
 RAW = Path("data/power/raw")
 # The whole paper mill with every shear modulus x STIFFNESS (docs/power.md, Setting); the
@@ -57,8 +58,7 @@ def run_case(particles: str | None, level: int, speed: float, stiffness: float) 
         angles.append(sim.drum_angle)
         snap_t.append(sim.time)
     radii = scene.particle_radii()
-    density = np.array([m.density for m in scene.materials])[scene.particle_materials()]
-    masses = density * 4.0 / 3.0 * np.pi * radii**3
+    masses = particle_masses(scene)
     cpu = time.process_time() - start
 
     with atomic_write(out, "wb") as fh:

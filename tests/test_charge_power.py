@@ -12,7 +12,7 @@ import pytest
 from scipy import integrate
 
 import millscope as ms
-from millscope.model.charge import GRAVITY, ChargeShape, charge_shape
+from millscope.model.charge import GRAVITY, ChargeShape, charge_shape, particle_masses
 from millscope.model.mill_power import (
     MORRELL_K,
     critical_speed_rad_s,
@@ -101,6 +101,14 @@ def test_a_lifter_gap_does_not_end_the_charge() -> None:
     whole = shape_of(bed, band_m=0.02, cell_m=0.03)
     assert with_gap.toe_rad == pytest.approx(whole.toe_rad, abs=math.radians(1.0))
     assert with_gap.shoulder_rad == pytest.approx(whole.shoulder_rad, abs=math.radians(1.0))
+
+
+def test_particle_masses_add_up_to_the_charge() -> None:
+    scene = ms.presets.pilot_mill(0.71, "ceramic", 2)
+    masses = particle_masses(scene)
+    assert masses.shape == (scene.n_particles,)
+    assert masses.sum() == pytest.approx(scene.charge_mass(), rel=1e-12)
+    assert masses[0] == pytest.approx(7860.0 * math.pi / 6 * 0.025**3)  # a steel ball, first
 
 
 def test_undefined_shapes_and_bad_inputs() -> None:

@@ -25,8 +25,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _checks
+from .scene import Scene
 
-__all__ = ["GRAVITY", "ChargeShape", "charge_shape"]
+__all__ = ["GRAVITY", "ChargeShape", "charge_shape", "particle_masses"]
 
 #: Gravitational acceleration, m/s^2 (docs/physics.md, Bodies).
 GRAVITY = 9.81
@@ -94,6 +95,13 @@ class ChargeShape:
         mass x g x (x of the centre of mass). In a steady state the charge's angular
         momentum does not change on average, so the mean drive torque equals this."""
         return self.mass_kg * GRAVITY * self.centre_of_mass_m[0]
+
+
+def particle_masses(scene: Scene) -> NDArray[np.float64]:
+    """Mass of every sphere of a scene, kg, shape (N,), in the order of
+    :meth:`Scene.particle_radii` (and of ``Simulation.positions``): density x 4/3 pi r^3."""
+    density = np.array([m.density for m in scene.materials])[scene.particle_materials()]
+    return density * (4.0 / 3.0) * np.pi * scene.particle_radii() ** 3
 
 
 def charge_shape(positions_m: ArrayLike, radii_m: ArrayLike, masses_kg: ArrayLike,
