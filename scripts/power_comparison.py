@@ -13,6 +13,7 @@ Run from the repository root::
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -55,7 +56,11 @@ def row(path: Path) -> dict[str, object]:
     particles = str(raw["particles"]) or None
     level = int(raw["load_level"]) or 1
     speed = float(raw["speed_fraction"])
-    scene = ms.presets.pilot_mill(speed, particles, level)
+    paper = ms.presets.pilot_mill(speed, particles, level)
+    # the ball count of the run (the balls are the largest spheres)
+    balls = int(np.count_nonzero(raw["radii_m"] == raw["radii_m"].max()))
+    scene = paper.replace(charge=tuple(dataclasses.replace(f, count=balls) if f.name == "balls"
+                                       else f for f in paper.charge))
     drum = scene.drum
     rec = ms.TorqueRecord(raw["time_s"], raw["torque_Nm"],
                           {"rotation_hz": float(raw["omega_rad_s"]) / (2 * math.pi)})
@@ -70,14 +75,17 @@ def row(path: Path) -> dict[str, object]:
     morrell = morrell_c_power(drum.diameter, drum.length, phi, j, density)
     hf = hogg_fuerstenau_power(drum.diameter, drum.length, phi, j, density,
                                shape.repose_angle_rad)
+    ball_filling = filling(scene.replace(charge=scene.charge[:1]))
+    group = ("balls" if particles is None else f"LD#{level}") + f", Jb {ball_filling:.2f}"
     out: dict[str, object] = {
-        "case": str(raw["scene_name"]), "particles": particles or "none",
+        "case": str(raw["scene_name"]), "group": group, "particles": particles or "none",
         "load_level": int(raw["load_level"]), "speed_fraction": speed,
         "speed_fraction_of_sqrt_2g_over_D": round(phi, 5),
         "stiffness_factor": float(raw["stiffness"]), "seed": int(raw["seed"]),
         "dt_s": float(raw["dt_s"]), "cpu_s": round(float(raw["cpu_s"]), 1),
         "steady_from_s": STEADY_FROM_S, "steady_to_s": round(power.span_s[1], 3),
-        "charge_mass_kg": shape.mass_kg, "filling_J": j, "charge_density_kg_m3": density,
+        "balls": balls, "charge_mass_kg": shape.mass_kg, "ball_filling_Jb": ball_filling,
+        "filling_J": j, "charge_density_kg_m3": density,
         "mean_torque_Nm": power.mean_torque_Nm, "gravity_torque_Nm": shape.gravity_torque_Nm,
         "power_W": power.power_W, "power_se_W": power.standard_error_W,
         "toe_deg": shape.toe_deg, "shoulder_deg": shape.shoulder_deg,
@@ -100,8 +108,8 @@ def main() -> int:
             print(f"no raw runs in {RAW}: run scripts/power_simulations.py first", file=sys.stderr)
             return 2
         table = pd.DataFrame([row(p) for p in paths])
-        table = table.sort_values(["stiffness_factor", "load_level", "speed_fraction"],
-                                  ascending=[False, True, True])
+        table = table.sort_values(["stiffness_factor", "load_level", "balls", "speed_fraction"],
+                                  ascending=[False, True, True, True])
         with atomic_write(TABLE) as fh:
             table.to_csv(fh, index=False, float_format="%.6g")
         print(f"wrote {TABLE} ({len(table)} rows)")

@@ -14,6 +14,7 @@ Run from the repository root, one core, politely::
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -29,7 +30,10 @@ RAW = Path("data/power/raw")
 # sensitivity run repeats the cases at x 0.001 (the "soft" scale).
 STIFFNESS = (0.01, 0.001)
 SPEEDS = (0.62, 0.71, 0.80)
-FILLINGS = ((None, 1), ("ceramic", 2))  # balls only; LD #2 (particle filling 80 % of voids)
+# (particles, load level, ball count): the paper's balls only (ball filling 19.3 %); more balls
+# (ball filling 30 %); LD #2 (the paper's balls, particles filling 80 % of their voids)
+FILLINGS = ((None, 1, None), (None, 1, 3864), ("ceramic", 2, None))
+POROSITY = 0.45  # of a bed at rest (docs/physics.md, the pilot mill)
 SEED = 0
 SPIN_UP_S = 1.0
 AVERAGE_S = 2.5
@@ -37,11 +41,16 @@ SNAPSHOT_S = 0.25
 SAMPLE_DT = 0.01
 
 
-def run_case(particles: str | None, level: int, speed: float, stiffness: float) -> Path:
+def run_case(particles: str | None, level: int, balls: int | None, speed: float,
+             stiffness: float) -> Path:
     """Runs one case and writes its raw file; returns the file's path."""
     paper = ms.presets.pilot_mill(speed, particles, level, scale="paper")
     scene = paper.replace(materials=tuple(m.with_shear_modulus(stiffness)
                                           for m in paper.materials))
+    if balls is not None:
+        charge = tuple(dataclasses.replace(f, count=balls) if f.name == "balls" else f
+                       for f in scene.charge)
+        scene = scene.replace(charge=charge, name=f"{scene.name} J{filling(charge, scene):.2f}")
     out = RAW / f"{scene.name.replace('#', '_')}_G{stiffness:g}.npz"
     if out.exists():
         return out
@@ -75,6 +84,12 @@ def run_case(particles: str | None, level: int, speed: float, stiffness: float) 
     return out
 
 
+def filling(charge: tuple[ms.Fraction, ...], scene: ms.Scene) -> float:
+    """Ball filling: the balls' bed (porosity POROSITY) as a fraction of the drum volume."""
+    balls = next(f for f in charge if f.name == "balls")
+    return balls.volume / (1.0 - POROSITY) / scene.drum.volume
+
+
 def _is_number(text: str) -> bool:
     try:
         float(text)
@@ -85,7 +100,8 @@ def _is_number(text: str) -> bool:
 
 def main() -> int:
     RAW.mkdir(parents=True, exist_ok=True)
-    # optional filters: "balls", "ceramic", a stiffness factor ("0.01"), a speed ("s0.71");
+    # optional filters: "balls", "balls+" (more balls), "ceramic", a stiffness factor
+    # ("0.01"), a speed ("s0.71");
     # several processes with different filters share the cases out between them
     only = sys.argv[1:]
     speeds = [float(a[1:]) for a in only if a.startswith("s")] or list(SPEEDS)
@@ -93,11 +109,12 @@ def main() -> int:
     for stiffness in STIFFNESS:
         if only and any(_is_number(a) for a in only) and f"{stiffness:g}" not in only:
             continue
-        for particles, level in FILLINGS:
-            if only and {"balls", "ceramic"} & set(only) and (particles or "balls") not in only:
+        for particles, level, balls in FILLINGS:
+            kind = (particles or "balls") + ("" if balls is None else "+")
+            if only and {"balls", "balls+", "ceramic"} & set(only) and kind not in only:
                 continue
             for speed in speeds:
-                run_case(particles, level, speed, stiffness)
+                run_case(particles, level, balls, speed, stiffness)
     return 0
 
 

@@ -292,7 +292,7 @@ def comparison_table() -> pd.DataFrame:
     for case, group in (("balls-{}", "balls"), ("LD{}#2", "LD")):
         for code, speed in (("LS", 0.62), ("MS", 0.71), ("HS", 0.80)):
             sim = 800.0 + 300.0 * (speed - 0.62) + (50.0 if group == "LD" else 0.0)
-            rows.append({"case": case.format(code), "speed_fraction": speed,
+            rows.append({"case": case.format(code), "group": group, "speed_fraction": speed,
                          "stiffness_factor": 0.001, "power_W": sim, "power_se_W": 10.0,
                          "morrell_power_W": 1.1 * sim, "morrell_diff_pct": 10.0,
                          "hogg_fuerstenau_power_W": 0.95 * sim,

@@ -20,7 +20,7 @@ __all__ = ["MODELS", "POWER_COLUMNS", "plot_power_comparison", "read_power_table
 MODELS = {"morrell": "Morrell C-model", "hogg_fuerstenau": "Hogg-Fuerstenau (simulated angle)"}
 
 #: The columns the figure needs.
-POWER_COLUMNS = ("case", "speed_fraction", "stiffness_factor", "power_W", "power_se_W",
+POWER_COLUMNS = ("case", "group", "speed_fraction", "stiffness_factor", "power_W", "power_se_W",
                  *(f"{m}_power_W" for m in MODELS), *(f"{m}_diff_pct" for m in MODELS))
 
 #: Largest table read, bytes: the comparison is a few kB.
@@ -59,7 +59,7 @@ def read_power_table(path: str | os.PathLike[str]) -> pd.DataFrame:
     missing = [c for c in POWER_COLUMNS if c not in table.columns]
     if missing:
         raise ValueError(f"power table {source}: missing column {', '.join(missing)}")
-    numeric = [c for c in POWER_COLUMNS if c != "case"]
+    numeric = [c for c in POWER_COLUMNS if c not in ("case", "group")]
     values = table[numeric].apply(pd.to_numeric, errors="coerce")
     if not np.all(np.isfinite(values.to_numpy(dtype=float))):
         raise ValueError(f"power table {source}: the columns {', '.join(numeric)} must hold "
@@ -71,7 +71,7 @@ def read_power_table(path: str | os.PathLike[str]) -> pd.DataFrame:
 def plot_power_comparison(table: pd.DataFrame, stiffness_factor: float | None = None
                           ) -> Figure:
     """Simulated drive power and each model's net power against speed, one panel per
-    filling, and the models' differences from the simulation in %.
+    filling (the table's ``group``), and the models' differences from the simulation in %.
 
     Parameters
     ----------
@@ -91,7 +91,7 @@ def plot_power_comparison(table: pd.DataFrame, stiffness_factor: float | None = 
     if rows.empty:
         raise ValueError(f"stiffness_factor = {stiffness_factor!r} is not valid; the table "
                          f"holds {sorted(set(table['stiffness_factor']))}")
-    groups = rows["case"].str.replace(r"(MS|LS|HS)", "", regex=True)
+    groups = rows["group"]
     labels = list(dict.fromkeys(groups))  # in the table's order
     fig = Figure(figsize=(4.2 * len(labels), 6.4), layout="constrained")
     axes = fig.subplots(2, len(labels), sharex=True, squeeze=False)
@@ -106,7 +106,7 @@ def plot_power_comparison(table: pd.DataFrame, stiffness_factor: float | None = 
             top.plot(pct, part[f"{key}_power_W"], markers[key] + "--", label=name)
             bottom.plot(pct, part[f"{key}_diff_pct"], markers[key] + "--", label=name)
         bottom.axhline(0.0, color="k", lw=0.8)
-        top.set_title(f"{label.replace('-', ' ').strip()} (G x {stiffness_factor:g})")
+        top.set_title(f"{label} (G x {stiffness_factor:g})")
         top.set_ylabel("net power, W")
         bottom.set_ylabel("model - simulated, % of simulated")
         bottom.set_xlabel("speed, % of critical")
