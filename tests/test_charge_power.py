@@ -280,6 +280,8 @@ def test_model_bad_inputs(kwargs: dict[str, float], message: str) -> None:
         morrell_c_power(**args)
     with pytest.raises(ValueError, match=f"hogg_fuerstenau_power {message}"):
         hogg_fuerstenau_power(**args, repose_angle_rad=0.6)
+    with pytest.raises(ValueError, match="filling = 0.5 at speed_fraction = 0.3 is not valid"):
+        morrell_c_power(D, L, 0.3, 0.5, 4000.0)
     with pytest.raises(ValueError, match=r"repose_angle_rad = 2.0 rad is not valid"):
         hogg_fuerstenau_power(D, L, 0.7, 0.2, 4000.0, 2.0)
 

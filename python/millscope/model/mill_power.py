@@ -252,6 +252,14 @@ def morrell_c_power(diameter_m: float, length_m: float, speed_fraction: float,
     toe, shoulder = morrell_toe_shoulder(phi, j)
     arc = 2.0 * math.pi + shoulder - toe  # the arc of the shell the charge covers
     lift = math.sin(shoulder) - math.sin(toe)
+    if 2.0 * math.pi * j >= arc:
+        # slow and full: the empirical toe and shoulder leave the charge too short an arc of
+        # the shell to hold the filling (r_i would be imaginary)
+        raise ValueError(
+            f"morrell_c_power filling = {_checks.show(filling)} at speed_fraction = "
+            f"{_checks.show(speed_fraction)} is not valid: the model's toe and shoulder "
+            f"({toe:.3f}, {shoulder:.3f} rad) span an arc of {arc:.3f} rad, too short to hold "
+            f"it; it must be < {arc / (2.0 * math.pi):.3f} at this speed (or the speed higher)")
     r_bar = 0.5 * r_m * (1.0 + math.sqrt(1.0 - 2.0 * math.pi * j / arc))
     t_c = (2.0 * math.pi - toe + shoulder) / (2.0 * math.pi * 0.5 * n_m)
     t_f = math.sqrt(2.0 * r_bar * lift / GRAVITY)
