@@ -9,7 +9,10 @@ MB) and is written atomically, so an interrupted run resumes where it stopped.
 
 Run from the repository root, one core, politely::
 
-    PYTHONPATH=python nice -n 10 python scripts/power_simulations.py
+    PYTHONPATH=python nice -n 10 python scripts/power_simulations.py [filters]
+
+Filters (any mix) pick cases, so that several processes can share them out: ``balls``,
+``balls+`` (more balls), ``ceramic``, a stiffness factor (``0.01``), a speed (``s0.71``).
 """
 
 from __future__ import annotations
@@ -26,12 +29,13 @@ from millscope._files import atomic_write
 from millscope.model.charge import particle_masses
 
 RAW = Path("data/power/raw")
-# The whole paper mill with every shear modulus x STIFFNESS (docs/power.md, Setting); the
-# sensitivity run repeats the cases at x 0.001 (the "soft" scale).
+# The whole paper mill with every shear modulus x these factors (docs/power.md, Setting):
+# x 0.001 (the "soft" scale) for the comparison, x 0.01 for the stiffness check.
 STIFFNESS = (0.01, 0.001)
 SPEEDS = (0.62, 0.71, 0.80)
-# (particles, load level, ball count): the paper's balls only (ball filling 19.3 %); more balls
-# (ball filling 30 %); LD #2 (the paper's balls, particles filling 80 % of their voids)
+# (particles, load level, ball count): the paper's balls only (ball filling 0.19 at porosity
+# 0.45); more balls (ball filling 0.30); LD #2 (the paper's balls, particles filling 80 % of
+# their voids)
 FILLINGS = ((None, 1, None), (None, 1, 3864), ("ceramic", 2, None))
 POROSITY = 0.45  # of a bed at rest (docs/physics.md, the pilot mill)
 SEED = 0
