@@ -317,6 +317,15 @@ def test_power_figure_draws_the_table(tmp_path: Path) -> None:
     assert np.allclose(line.get_ydata(), balls["power_W"])
     with pytest.raises(ValueError, match="stiffness_factor = 0.5 is not valid"):
         plot_power_comparison(table, 0.5)
+    # a stiffness check of one filling: drawn as extra points in its panel only
+    check = table[table["case"].str.startswith("balls")].assign(stiffness_factor=0.01,
+                                                                  power_W=900.0)
+    fig = plot_power_comparison(pd.concat([table, check]))
+    panel = next(ax for ax in fig.axes if ax.get_title().startswith("balls"))
+    extra = [ln for ln in panel.lines if ln.get_label() == "simulated, G x 0.01"]
+    assert len(extra) == 1 and np.allclose(extra[0].get_ydata(), 900.0)
+    assert not any(ln.get_label() == "simulated, G x 0.01" for ax in fig.axes
+                   if ax is not panel for ln in ax.lines)
 
 
 def test_power_table_bad_files(tmp_path: Path) -> None:

@@ -72,6 +72,7 @@ def plot_power_comparison(table: pd.DataFrame, stiffness_factor: float | None = 
                           ) -> Figure:
     """Simulated drive power and each model's net power against speed, one panel per
     filling (the table's ``group``), and the models' differences from the simulation in %.
+    Rows of the same filling at another stiffness factor show as open circles.
 
     Parameters
     ----------
@@ -91,6 +92,7 @@ def plot_power_comparison(table: pd.DataFrame, stiffness_factor: float | None = 
     if rows.empty:
         raise ValueError(f"stiffness_factor = {stiffness_factor!r} is not valid; the table "
                          f"holds {sorted(set(table['stiffness_factor']))}")
+    others = table[~np.isclose(table["stiffness_factor"], stiffness_factor)]
     groups = rows["group"]
     labels = list(dict.fromkeys(groups))  # in the table's order
     fig = Figure(figsize=(4.2 * len(labels), 6.4), layout="constrained")
@@ -105,6 +107,11 @@ def plot_power_comparison(table: pd.DataFrame, stiffness_factor: float | None = 
         for key, name in MODELS.items():
             top.plot(pct, part[f"{key}_power_W"], markers[key] + "--", label=name)
             bottom.plot(pct, part[f"{key}_diff_pct"], markers[key] + "--", label=name)
+        # the same filling simulated at another stiffness (a check), as open circles
+        for factor, other in others[others["group"] == label].groupby("stiffness_factor"):
+            other = other.sort_values("speed_fraction")
+            top.plot(100.0 * other["speed_fraction"], other["power_W"], "o", mfc="none",
+                     color="0.4", label=f"simulated, G x {factor:g}")
         bottom.axhline(0.0, color="k", lw=0.8)
         top.set_title(f"{label} (G x {stiffness_factor:g})")
         top.set_ylabel("net power, W")
@@ -112,6 +119,5 @@ def plot_power_comparison(table: pd.DataFrame, stiffness_factor: float | None = 
         bottom.set_xlabel("speed, % of critical")
         for ax in (top, bottom):
             ax.grid(True, alpha=0.3)
-        if col == 0:
-            top.legend(fontsize="small")
+        top.legend(fontsize="small")
     return fig
