@@ -120,13 +120,9 @@ Variant choose_variant(const Config& c, const materials::PairTable& table) {
     }
   }
   Variant v;
-  if (c.clamp_normal) {
-    v.law = Variant::Law::clamped;
-  } else if (friction) {
-    v.law = Variant::Law::hertz_mindlin;
-  } else {
-    v.law = damping ? Variant::Law::frictionless : Variant::Law::elastic;
-  }
+  // The engine's clamped kernels carry friction (mu = 0 gives no tangential force): there are
+  // no frictionless clamped ones.
+  v.law = contact::choose_law(friction || c.clamp_normal, damping, c.clamp_normal);
   v.one_material = used.size() == 1;
   v.lifters = c.geometry.lifters > 0;
   v.end_walls = c.geometry.end_walls;
@@ -144,13 +140,13 @@ StepKernel kernel_of(const Variant& v) {
       return kernels::elastic(v.one_material, v.lifters, v.end_walls, v.track_energy);
     case Variant::Law::clamped:
       return kernels::clamped(v.one_material, v.lifters, v.end_walls, v.track_energy);
+    case Variant::Law::frictionless_clamped:
+      break;  // never chosen (choose_variant)
   }
-  throw std::logic_error("unknown contact law");
+  throw std::logic_error("the engine has no step kernels for this contact law");
 }
 
-bool has_friction(const Variant& v) {
-  return v.law == Variant::Law::hertz_mindlin || v.law == Variant::Law::clamped;
-}
+bool has_friction(const Variant& v) { return contact::has_friction(v.law); }
 
 double default_skin(const std::vector<double>& radius) {
   // 0.4 r_min: 5 mm for the pilot mill's 12.5 mm balls, as the LIGGGHTS yardstick uses.
@@ -161,7 +157,8 @@ double default_skin(const std::vector<double>& radius) {
 
 std::string Variant::describe() const {
   static const char* laws[] = {"hertz-mindlin", "hertz-mindlin without friction",
-                               "hertz elastic without friction", "hertz-mindlin, clamped"};
+                               "hertz elastic without friction", "hertz-mindlin, clamped",
+                               "hertz-mindlin without friction, clamped"};
   std::string s = laws[static_cast<int>(law)];
   s += one_material ? ", one material" : ", pair table";
   s += lifters ? ", lifters" : ", no lifters";

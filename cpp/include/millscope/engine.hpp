@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "millscope/contact.hpp"
 #include "millscope/drum.hpp"
 #include "millscope/materials.hpp"
 #include "millscope/neighbors.hpp"
@@ -119,7 +120,7 @@ struct Ledger {
 
 /// Which specialised step kernel a scene needs (docs/architecture.md, What a scene pays for).
 struct Variant {
-  enum class Law : int { hertz_mindlin = 0, frictionless = 1, elastic = 2, clamped = 3 };
+  using Law = contact::Law;  // contact::choose_law; never frictionless_clamped (see engine.cpp)
   Law law = Law::hertz_mindlin;
   bool one_material = false;
   bool lifters = false;

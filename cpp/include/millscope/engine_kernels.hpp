@@ -91,6 +91,9 @@ MILLSCOPE_LANE_TARGETS inline void contact_forces_in_lanes(
     ContactBatch& b, const materials::PairConstants* pairs, const double* r, const double* inv_m,
     const double* vx, const double* vy, const double* vz, const double* wx, const double* wy,
     const double* wz, double dt) {
+  using Normal = contact::HertzMindlin::normal_part;
+  using Damping = contact::HertzMindlin::damping_part;
+  using Tangential = contact::HertzMindlin::tangential_part;
   const std::size_t n = b.size;
   const std::uint32_t* __restrict bi = b.i.data();
   const std::uint32_t* __restrict bj = b.j.data();
@@ -132,28 +135,17 @@ MILLSCOPE_LANE_TARGETS inline void contact_forces_in_lanes(
     const double v_n = vrx * nx + vry * ny + vrz * nz;
     const double vtx = vrx - v_n * nx, vty = vry - v_n * ny, vtz = vrz - v_n * nz;
     const double sqrt_rd = std::sqrt(r_star * d_n);
-    const double s_n = 2.0 * p.e_star * sqrt_rd;                        // (4)
-    const double gamma_n = p.damping_factor * std::sqrt(s_n * m_star);  // (2)
-    const double f_n = (2.0 / 3.0) * s_n * d_n - gamma_n * v_n;         // (1), (2)
-    const double s_t = 8.0 * p.g_star * sqrt_rd;                        // (6)
-    // The spring turned into the tangent plane, its length kept, then advanced by v_t dt.
+    const double s_n = Normal::stiffness(p, sqrt_rd);            // (4)
+    const double gamma_n = Damping::gamma(p, s_n, m_star);       // (2)
+    const double f_n = Normal::force(s_n, d_n) - gamma_n * v_n;  // (1), (2)
+    const double s_t = Tangential::stiffness(p, sqrt_rd);        // (6)
     double sx = sxs[c], sy = sys[c], sz = szs[c];
-    const double before2 = sx * sx + sy * sy + sz * sz;
-    const double along = sx * nx + sy * ny + sz * nz;
-    sx -= along * nx, sy -= along * ny, sz -= along * nz;
-    const double after2 = sx * sx + sy * sy + sz * sz;
-    const double keep = after2 > 0.0 ? std::sqrt(before2 / after2) : 0.0;
-    sx *= keep, sy *= keep, sz *= keep;
-    sx += vtx * dt, sy += vty * dt, sz += vtz * dt;
+    Tangential::turn(sx, sy, sz, nx, ny, nz);
+    Tangential::advance(sx, sy, sz, vtx, vty, vtz, dt);
     const double gamma_t = gamma_n * p.tangential_damping_ratio;  // (7)
-    double ftx = -s_t * sx + -gamma_t * vtx;                      // (5), (7)
-    double fty = -s_t * sy + -gamma_t * vty;
-    double ftz = -s_t * sz + -gamma_t * vtz;
-    const double limit = p.friction * std::abs(f_n);  // (8)
-    const double f2 = ftx * ftx + fty * fty + ftz * ftz;
-    const bool sliding = f2 > limit * limit;
-    const double scale = sliding ? limit / std::sqrt(f2) : 1.0;
-    ftx *= scale, fty *= scale, ftz *= scale;
+    double ftx, fty, ftz;
+    Tangential::trial(s_t, gamma_t, sx, sy, sz, vtx, vty, vtz, ftx, fty, ftz);  // (5), (7)
+    const bool sliding = Tangential::limit(p, f_n, ftx, fty, ftz);              // (8)
     sxs[c] = sliding ? -ftx / s_t : sx;
     sys[c] = sliding ? -fty / s_t : sy;
     szs[c] = sliding ? -ftz / s_t : sz;
