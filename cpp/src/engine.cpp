@@ -217,7 +217,7 @@ Engine::Engine(Config config)
   variant_ = choose_variant(config_, pairs_);
   kernel_ = kernel_of(variant_);
   const bool friction = has_friction(variant_);
-  list_ = neighbors::VerletList(list_.skin(), friction ? 3 : 0,
+  list_ = neighbors::VerletList(list_.skin(), contact::history_size(variant_.law),
                                 config_.geometry.end_walls ? 0.0 : config_.geometry.length);
 
   for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_, &ty_,
@@ -505,7 +505,7 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
         const auto block = static_cast<std::size_t>(wall_block[i]);
         std::size_t slot = static_cast<std::size_t>(wc.part);
         if (wc.part == drum::Part::lifter) slot = wall_lifter[2 * block] == wc.index ? 3 : 4;
-        hist = wall_history.data() + (block * wall_slots + slot) * 3;
+        hist = wall_history.data() + (block * wall_slots + slot) * hs;
       }
       const auto& p = table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(c.drum_material));
       f(p, wc.overlap, r[i], r[i], hist);
@@ -547,13 +547,14 @@ Engine::Snapshot Engine::snapshot() const {
   s.t = copy_out(tx_, ty_, tz_);
   s.x_ref = copy_out(x_ref_, y_ref_, z_ref_);
   // Wall history per particle (slot order), as if every particle had a block.
-  s.wall_history.assign(wall_block_.empty() ? 0 : n_ * wall_slots * 3, 0.0);
+  const std::size_t width = wall_slots * history_size();  // wall history per particle
+  s.wall_history.assign(wall_block_.empty() ? 0 : n_ * width, 0.0);
   s.wall_lifter.assign(2 * n_, -1);
   for (std::size_t i = 0; i < wall_block_.size(); ++i) {
     if (wall_block_[i] < 0) continue;
     const auto b = static_cast<std::size_t>(wall_block_[i]);
-    std::copy_n(wall_history_.begin() + static_cast<std::ptrdiff_t>(b * wall_slots * 3),
-                wall_slots * 3, s.wall_history.begin() + static_cast<std::ptrdiff_t>(i * wall_slots * 3));
+    std::copy_n(wall_history_.begin() + static_cast<std::ptrdiff_t>(b * width), width,
+                s.wall_history.begin() + static_cast<std::ptrdiff_t>(i * width));
     std::copy_n(wall_lifter_.begin() + static_cast<std::ptrdiff_t>(2 * b), 2,
                 s.wall_lifter.begin() + static_cast<std::ptrdiff_t>(2 * i));
   }
@@ -579,7 +580,7 @@ void Engine::restore(const Snapshot& s) {
   };
   for (const auto* a : {&s.x, &s.v, &s.w, &s.f, &s.t, &s.x_ref})
     require(a->size() == n3, "a state array has " + std::to_string(a->size()) + " values, not " + std::to_string(n3));
-  require(s.wall_history.size() == (wall_block_.empty() ? 0 : n_ * wall_slots * 3),
+  require(s.wall_history.size() == (wall_block_.empty() ? 0 : n_ * wall_slots * history_size()),
           "wall history size");
   require(s.wall_lifter.size() == 2 * n_, "wall lifter slots size");
   require(s.step >= 0, "step < 0");
@@ -612,9 +613,10 @@ void Engine::restore(const Snapshot& s) {
   for (std::size_t i = 0; i < wall_held_.size(); ++i) {
     unsigned held = 0;
     for (std::size_t slot = 0; slot < wall_slots; ++slot) {
-      const double* h = &wall_history_[(i * wall_slots + slot) * 3];
-      const bool lifter_held = slot >= 3 && wall_lifter_[2 * i + slot - 3] >= 0;
-      if (lifter_held || h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0) held |= 1u << slot;
+      const double* h = &wall_history_[(i * wall_slots + slot) * history_size()];
+      bool any = slot >= 3 && wall_lifter_[2 * i + slot - 3] >= 0;  // a lifter held
+      for (std::size_t k = 0; k < history_size(); ++k) any = any || h[k] != 0.0;
+      if (any) held |= 1u << slot;
     }
     wall_held_[i] = static_cast<std::uint8_t>(held);
   }
@@ -704,7 +706,7 @@ void Engine::Access::refresh_walls(Engine& e) {
   if (e.wall_block_.empty()) return;  // no friction: no wall history
   // Blocks of wall history for the particles near the shell, an end wall or a lifter, and for
   // any that still holds a contact; packed in particle order, carried over from the old blocks.
-  constexpr std::size_t width = wall_slots * 3;
+  const std::size_t width = wall_slots * e.history_size();
   std::vector<std::int32_t> block(e.n_, -1);
   std::int32_t blocks = 0;
   for (std::size_t i = 0; i < e.n_; ++i) {

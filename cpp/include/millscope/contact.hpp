@@ -391,12 +391,17 @@ struct ContactLaw {
     for (std::size_t i = 0; i < history_size; ++i) history[i] = 0.0;
   }
 
+  /// Whether the history holds anything (a contact under way, or one that has just ended).
+  static bool holds(const double* history) {
+    bool held = false;
+    for (std::size_t i = 0; i < history_size; ++i) held |= history[i] != 0.0;
+    return held;
+  }
+
   /// reset() for a pair that may long have been apart: writes only when something is held, so
   /// the hot loop does not dirty the history of every listed pair that does not touch.
   static void clear(double* history) {
-    bool held = false;
-    for (std::size_t i = 0; i < history_size; ++i) held |= history[i] != 0.0;
-    if (held) reset(history);
+    if (holds(history)) reset(history);
   }
 };
 
@@ -457,9 +462,14 @@ auto with_law(Law law, F&& f) {
   return f(LawTag<HertzMindlinFrictionlessClamped>{});
 }
 
-/// Whether the law has a tangential part (and so a history and torques).
+/// Whether the law has a tangential part (and so torques).
 inline bool has_friction(Law law) {
   return with_law(law, [](auto tag) { return decltype(tag)::type::has_friction; });
+}
+
+/// Doubles of history per contact the law keeps (ContactLaw::history_size).
+inline std::size_t history_size(Law law) {
+  return with_law(law, [](auto tag) { return decltype(tag)::type::history_size; });
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -183,8 +183,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // the forces are the same to the bit and only the drive work is booked.
   constexpr bool dissipates = Law::dissipates && Tally;
   constexpr std::size_t width = buffer_width(dissipates);  // per-thread buffer, x n doubles
-  static_assert(!friction || hs == 3, "the wall history slots hold 3 doubles per contact");
-  static_assert(hs == 0 || hs == 3,
+  static_assert(hs == Law::tangential_part::history_size,
                 "the pair history is the tangential spring alone, odd under swapping the pair "
                 "(neighbors::VerletList negates it when a reorder swaps the pair's ranks)");
 
@@ -247,6 +246,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
   // The paper's law without the ledger computes its pair contacts in SIMD lanes
   // (contact_forces_in_lanes); the ledger's kernels and the other laws take pair_force.
   constexpr bool in_lanes = std::is_same_v<Law, contact::HertzMindlin> && !Tally;
+  static_assert(!in_lanes || hs == 3, "the lanes carry the spring d_t, 3 doubles");
   // ... and finds them with the wide search where the CPU can (Engine::wide_pair_search).
   [[maybe_unused]] const bool wide = in_lanes && e.wide_pair_search();
   // ... asking ahead for the state of the partners where the data exceed the caches: their
@@ -470,7 +470,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
         const double d2 = dx * dx + dy * dy + dz * dz;
         if (!(d2 < r_sum * r_sum)) {
           if constexpr (dissipates && friction) {
-            if (hist[0] != 0.0 || hist[1] != 0.0 || hist[2] != 0.0) {  // a contact has ended
+            if (Law::holds(hist)) {  // a contact has ended
               part.spring_work -= ended_pair_energy(i, j, dx, dy, dz, history_dt, hist);
               Law::reset(hist);
             }
@@ -571,7 +571,7 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
     if constexpr (friction) {  // a particle near the drum has a block (see particle_pass)
       const auto block = static_cast<std::size_t>(e.wall_block_[i]);
       lifter_of_slot = &e.wall_lifter_[2 * block];
-      wall_hist = &e.wall_history_[block * wall_slots * 3];
+      wall_hist = &e.wall_history_[block * wall_slots * hs];
     }
     for (int c = 0; c < found.count; ++c) {
       const drum::WallContact& wc = found.items[static_cast<std::size_t>(c)];
@@ -596,15 +596,15 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
             slot = slot3_held ? 4 : 3;
             if constexpr (dissipates)  // the slot's last holder has left it
               part.spring_work -= ended_wall_energy(i, slot, lifter_of_slot[slot - 3],
-                                                    history_dt, wall_hist + slot * 3);
+                                                    history_dt, wall_hist + slot * hs);
             lifter_of_slot[slot - 3] = wc.index;
-            Law::reset(wall_hist + slot * 3);
+            Law::reset(wall_hist + slot * hs);
           }
         } else {
           slot = static_cast<std::size_t>(wc.part);  // shell 0, end_low 1, end_high 2
         }
         used |= 1u << slot;
-        hist = wall_hist + slot * 3;
+        hist = wall_hist + slot * hs;
       }
       if (wc.overlap > max_overlap * r[i]) note_overlap(part, i, wc.overlap / r[i], true);
       const Vec3 v_wall = drum::surface_velocity(omega, wc.point);
@@ -647,9 +647,9 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
           if (!(ended & (1u << slot))) continue;
           if constexpr (dissipates)
             part.spring_work -= ended_wall_energy(i, slot, slot >= 3 ? lifter_of_slot[slot - 3] : -1,
-                                                  history_dt, wall_hist + slot * 3);
+                                                  history_dt, wall_hist + slot * hs);
           if (slot >= 3) lifter_of_slot[slot - 3] = -1;
-          Law::reset(wall_hist + slot * 3);
+          Law::reset(wall_hist + slot * hs);
         }
       }
       e.wall_held_[i] = static_cast<std::uint8_t>(used);
