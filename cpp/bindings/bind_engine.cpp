@@ -7,7 +7,6 @@
 #include <type_traits>
 
 #include "millscope/engine.hpp"
-#include "millscope/touching_pairs.hpp"
 #include "numpy_view.hpp"
 
 namespace millscope::bindings {

@@ -1,6 +1,9 @@
-// The engine's set-up, state access, observables and checkpoints (engine.hpp). The step loop
-// itself is in engine_kernels.hpp.
+// The engine's set-up, state access, observables and checkpoints (engine.hpp), and the list
+// upkeep the step kernels call (Access). The step loop itself is in src/step/run.hpp.
 #include "millscope/engine.hpp"
+
+#include "engine_access.hpp"
+#include "touching_pairs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,9 +17,7 @@
 #include <utility>
 
 #include "millscope/contact.hpp"
-#include "millscope/engine_kernels.hpp"
 #include "millscope/timestep.hpp"
-#include "millscope/touching_pairs.hpp"
 
 namespace millscope::engine {
 
@@ -165,6 +166,16 @@ std::string Variant::describe() const {
   s += end_walls ? ", end walls" : ", periodic ends";
   if (!track_energy && law != Law::elastic) s += ", dissipation not booked";
   return s;
+}
+
+bool wide_pairs_supported() {
+#if MILLSCOPE_WIDE_PAIRS
+  const char* off = std::getenv("MILLSCOPE_NO_WIDE_PAIRS");
+  if (off != nullptr && off[0] != '\0' && !(off[0] == '0' && off[1] == '\0')) return false;
+  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+#else
+  return false;
+#endif
 }
 
 bool Engine::wide_pair_search() const {

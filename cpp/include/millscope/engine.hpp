@@ -16,7 +16,7 @@
 // What a scene does not use costs nothing: the contact law (friction or none, damping or none,
 // clamped or not), one material or a pair table, lifters or none, end walls or periodic ends
 // are template parameters of the step kernel, chosen once when the engine is made
-// (engine_kernels.hpp, instantiated in src/engine_*.cpp).
+// (src/step/run.hpp, instantiated in the generated engine_law_*.cpp).
 //
 // Storage order: at every neighbour-list build the particles are re-stored in cell order
 // (neighbors::VerletList::spatial_order; Config::reorder), so that contacting particles sit
@@ -139,6 +139,16 @@ struct Variant {
 /// every guard_interval-th step instead of every step keeps the guards' cost well below 1 % of
 /// a step.
 inline constexpr long guard_interval = 8;
+
+/// The pair pass with the wide search (src/touching_pairs.hpp) takes blocks of rows holding at
+/// most this many listed pairs (or one row that holds more): about 70 contacts in the pilot
+/// mill's charges.
+inline constexpr std::size_t wide_block_listed = 224;
+
+/// Whether this build and this CPU run the wide pair search (src/touching_pairs.hpp). Setting
+/// the environment variable MILLSCOPE_NO_WIDE_PAIRS (to anything but "" or "0") turns it off,
+/// so that the portable search can be run and tested on a CPU that has AVX-512.
+bool wide_pairs_supported();
 
 /// Wall contact history per particle: shell, low end, high end, and two lifter slots.
 inline constexpr std::size_t wall_slots = 5;
@@ -298,7 +308,7 @@ class Engine {
   Snapshot snapshot() const;
   void restore(const Snapshot& s);
 
-  // ---- used by the step kernels (engine_kernels.hpp)
+  // ---- used by the step kernels (src/engine_access.hpp, src/step/)
   struct Access;
 
  private:
