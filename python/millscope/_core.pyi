@@ -77,6 +77,7 @@ DEFAULT_DT_FRACTION: float
 MAX_DT_FRACTION: float
 GUARD_INTERVAL: int
 WIDE_BLOCK_LISTED: int
+SNAPSHOT_ARRAYS: tuple[str, ...]
 
 class Material(metaclass=_pybind11_type):
     def __init__(self, density: float, shear_modulus: float, poisson: float) -> None: ...
@@ -264,6 +265,8 @@ class Engine(metaclass=_pybind11_type):
     def threads(self) -> int: ...
     @property
     def variant(self) -> str: ...
+    @property
+    def history_size(self) -> int: ...
     @property
     def track_energy(self) -> bool: ...
     @property

@@ -121,9 +121,9 @@ class SettleReport:
 
 Phase = Literal["empty", "filled", "settled", "rotating"]
 _PHASES: tuple[Phase, ...] = ("empty", "filled", "settled", "rotating")
-#: The arrays of the engine's snapshot, saved as .npy members of a checkpoint.
-_SNAPSHOT_ARRAYS = ("order", "x", "v", "w", "f", "t", "x_ref", "wall_history", "wall_lifter",
-                    "list_start", "list_partner", "list_history")
+#: The arrays of the engine's snapshot, saved as .npy members of a checkpoint (listed once, in
+#: the engine: Engine::Snapshot::for_each_field).
+_SNAPSHOT_ARRAYS: tuple[str, ...] = tuple(_core.SNAPSHOT_ARRAYS)
 
 
 class Simulation:
@@ -646,7 +646,7 @@ class Simulation:
                                    phase, scene, dt)
         n = scene.n_particles
         partners = ck.max_partners(scene, sim._engine.skin)
-        history_size = 3 if template["wall_history"].size else 0  # friction: a spring per pair
+        history_size = int(sim._engine.history_size)  # the law's, per pair and wall slot
         limits = {"list_start": n + 1, "list_partner": partners,
                   "list_history": history_size * partners}
         arrays = {k: ck.read_npy(zf, found[k], template[k].dtype,
