@@ -208,6 +208,22 @@ def test_calibration_from_results_chooses_among_groups(campaign_results) -> None
         ms.Calibration.from_results(single)
 
 
+def test_a_groups_log_fit_is_its_fit_or_a_clear_error(campaign_results) -> None:
+    """GroupAnalysis.log_fit (typed LogFit, for code that needs the fit) is the fit, whose slope
+    is scipy's linregress of the per-unit energy on ln(level); with one level it raises."""
+    from .synthetic_campaign import case_results
+
+    (group,) = ms.analyze_campaign(campaign_results)
+    assert group.log_fit is group.fit
+    ref = stats.linregress(np.log(group.levels), group.energy_pu)
+    assert group.log_fit.a == pytest.approx(ref.slope, rel=1e-12)
+    (single,) = ms.analyze_campaign(case_results(levels=(2,)))
+    assert single.fit is None
+    with pytest.raises(ValueError, match=r"group LDMS has a single load level \(2\); a fit "
+                                         r"needs at least 2"):
+        _ = single.log_fit
+
+
 def test_a_two_level_calibration_warns_and_so_does_each_estimate_without_interval() -> None:
     """Through 2 levels the fit is exact (R^2 = 1 against scipy's r of +-1) with no residual
     left: the calibration is made with a warning, and an estimate from it warns that its

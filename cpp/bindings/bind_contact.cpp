@@ -58,22 +58,17 @@ ContactEvaluation evaluate_pair(const materials::PairConstants& p, const contact
   return out;
 }
 
+// `friction`: whether the pair's friction acts (the law without a tangential part if not).
 ContactEvaluation evaluate(const materials::PairConstants& p, const contact::SphereState& i,
                            const contact::SphereState* j, const contact::Vec3& normal,
                            double overlap, const contact::Vec3& wall_velocity,
                            const std::array<double, 3>& history, double dt, bool friction,
                            bool clamp) {
-  namespace c = contact;
-  if (friction) {
-    return clamp ? evaluate_pair<c::HertzMindlinClamped>(p, i, j, normal, overlap, wall_velocity,
-                                                         history, dt)
-                 : evaluate_pair<c::HertzMindlin>(p, i, j, normal, overlap, wall_velocity,
-                                                  history, dt);
-  }
-  return clamp ? evaluate_pair<c::HertzMindlinFrictionlessClamped>(p, i, j, normal, overlap,
-                                                                   wall_velocity, history, dt)
-               : evaluate_pair<c::HertzMindlinFrictionless>(p, i, j, normal, overlap,
-                                                            wall_velocity, history, dt);
+  const contact::Law law = contact::choose_law(friction, p.restitution < 1.0, clamp);
+  return contact::with_law(law, [&](auto tag) {
+    return evaluate_pair<typename decltype(tag)::type>(p, i, j, normal, overlap, wall_velocity,
+                                                       history, dt);
+  });
 }
 
 }  // namespace

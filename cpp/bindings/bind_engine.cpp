@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <type_traits>
 
 #include "millscope/engine.hpp"
-#include "millscope/touching_pairs.hpp"
 #include "numpy_view.hpp"
 
 namespace millscope::bindings {
@@ -32,6 +32,11 @@ py::array_t<T> as_n3(std::vector<T>&& v) {
 }
 
 template <class T>
+struct is_vector : std::false_type {};
+template <class T>
+struct is_vector<std::vector<T>> : std::true_type {};
+
+template <class T>
 std::vector<T> vector_of(const py::dict& d, const char* key) {
   if (!d.contains(key)) throw std::invalid_argument(std::string("the snapshot has no '") + key + "'");
   auto a = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(d[key]);
@@ -43,6 +48,62 @@ template <class T>
 T scalar_of(const py::dict& d, const char* key) {
   if (!d.contains(key)) throw std::invalid_argument(std::string("the snapshot has no '") + key + "'");
   return py::cast<T>(d[key]);
+}
+
+// A snapshot's fields into a dict: arrays as numpy arrays, the torque and ledger as tuples.
+struct SnapshotToPython {
+  py::dict& d;
+  template <class T>
+  void operator()(const char* key, std::vector<T>& v) const {
+    d[key] = to_numpy(std::move(v));
+  }
+  template <class T>
+  void operator()(const char* key, const T& value) const {
+    d[key] = value;
+  }
+  void operator()(const char* key, const en::Torque& t) const {
+    d[key] = py::make_tuple(t.total, t.shell, t.lifters, t.ends);
+  }
+  void operator()(const char* key, const en::Ledger& l) const {
+    d[key] = py::make_tuple(l.drive_work, l.damping_loss, l.friction_loss, l.dissipated,
+                            l.spring_work);
+  }
+};
+
+// ... and back; the restore checks the values against the engine.
+struct SnapshotFromPython {
+  const py::dict& d;
+  template <class T>
+  void operator()(const char* key, std::vector<T>& v) const {
+    v = vector_of<T>(d, key);
+  }
+  template <class T>
+  void operator()(const char* key, T& value) const {
+    value = scalar_of<T>(d, key);
+  }
+  void operator()(const char* key, en::Torque& t) const {
+    const auto v = scalar_of<std::vector<double>>(d, key);
+    if (v.size() != 4)
+      throw std::invalid_argument("the snapshot's torque or ledger has the wrong length");
+    t = en::Torque{v[0], v[1], v[2], v[3]};
+  }
+  void operator()(const char* key, en::Ledger& l) const {
+    const auto v = scalar_of<std::vector<double>>(d, key);
+    // a ledger of 4 is a checkpoint from before spring_work was booked
+    if (v.size() != 4 && v.size() != 5)
+      throw std::invalid_argument("the snapshot's torque or ledger has the wrong length");
+    l = en::Ledger{v[0], v[1], v[2], v[3], v.size() == 5 ? v[4] : 0.0};
+  }
+};
+
+// The keys of the snapshot's arrays (Engine::Snapshot::for_each_field), in its order.
+py::tuple snapshot_arrays() {
+  py::list keys;
+  en::Engine::Snapshot s;
+  en::Engine::Snapshot::for_each_field(s, [&](const char* key, const auto& field) {
+    if constexpr (is_vector<std::decay_t<decltype(field)>>::value) keys.append(key);
+  });
+  return py::tuple(keys);
 }
 
 py::dict torque_dict(const en::Torque& t) {
@@ -62,6 +123,7 @@ void register_engine(py::module_& m) {
 
   m.attr("GUARD_INTERVAL") = en::guard_interval;  // steps between the state guards' looks
   m.attr("WIDE_BLOCK_LISTED") = en::wide_block_listed;  // listed pairs in a wide-search block
+  m.attr("SNAPSHOT_ARRAYS") = snapshot_arrays();  // Engine.snapshot()'s arrays, by key
   py::class_<en::Engine>(m, "Engine", "The DEM engine: state, step loop, torque (engine.hpp).")
       .def(py::init([](std::vector<materials::Material> materials, const InArray& restitution,
                        const InArray& friction, int drum_material, const drum::Geometry& geometry,
@@ -105,6 +167,8 @@ void register_engine(py::module_& m) {
       .def_property_readonly("track_energy",
                              [](const en::Engine& e) { return e.variant().track_energy; },
                              "Whether the step books the dissipated energy (a law that dissipates)")
+      .def_property_readonly("history_size", &en::Engine::history_size,
+                             "Doubles of contact history per pair and per wall slot (the law's)")
       .def_property_readonly("skin", &en::Engine::skin)
       .def_property_readonly("max_speed", &en::Engine::max_speed,
                              "Guard: the speed no particle may exceed, m/s")
@@ -182,28 +246,7 @@ void register_engine(py::module_& m) {
            [](const en::Engine& e) {
              en::Engine::Snapshot s = e.snapshot();
              py::dict d;
-             d["order"] = to_numpy(std::move(s.order));
-             d["x"] = to_numpy(std::move(s.x));
-             d["v"] = to_numpy(std::move(s.v));
-             d["w"] = to_numpy(std::move(s.w));
-             d["f"] = to_numpy(std::move(s.f));
-             d["t"] = to_numpy(std::move(s.t));
-             d["x_ref"] = to_numpy(std::move(s.x_ref));
-             d["wall_history"] = to_numpy(std::move(s.wall_history));
-             d["wall_lifter"] = to_numpy(std::move(s.wall_lifter));
-             d["list_start"] = to_numpy(std::move(s.list_start));
-             d["list_partner"] = to_numpy(std::move(s.list_partner));
-             d["list_history"] = to_numpy(std::move(s.list_history));
-             d["step"] = s.step;
-             d["rotation_start"] = s.rotation_start;
-             d["last_sample_offset"] = s.last_sample_offset;
-             d["list_builds"] = s.list_builds;
-             d["theta"] = s.theta;
-             d["omega"] = s.omega;
-             d["forces_valid"] = s.forces_valid;
-             d["torque"] = py::make_tuple(s.torque.total, s.torque.shell, s.torque.lifters, s.torque.ends);
-             d["ledger"] = py::make_tuple(s.ledger.drive_work, s.ledger.damping_loss, s.ledger.friction_loss,
-                                         s.ledger.dissipated, s.ledger.spring_work);
+             en::Engine::Snapshot::for_each_field(s, SnapshotToPython{d});
              return d;
            },
            "Every array and scalar needed to continue the run bit for bit (a checkpoint).")
@@ -211,32 +254,7 @@ void register_engine(py::module_& m) {
           "restore",
           [](en::Engine& e, const py::dict& d) {
             en::Engine::Snapshot s;
-            s.order = vector_of<std::uint32_t>(d, "order");
-            s.x = vector_of<double>(d, "x");
-            s.v = vector_of<double>(d, "v");
-            s.w = vector_of<double>(d, "w");
-            s.f = vector_of<double>(d, "f");
-            s.t = vector_of<double>(d, "t");
-            s.x_ref = vector_of<double>(d, "x_ref");
-            s.wall_history = vector_of<double>(d, "wall_history");
-            s.wall_lifter = vector_of<std::int32_t>(d, "wall_lifter");
-            s.list_start = vector_of<std::uint32_t>(d, "list_start");
-            s.list_partner = vector_of<std::uint32_t>(d, "list_partner");
-            s.list_history = vector_of<double>(d, "list_history");
-            s.step = scalar_of<long>(d, "step");
-            s.rotation_start = scalar_of<long>(d, "rotation_start");
-            s.last_sample_offset = scalar_of<long>(d, "last_sample_offset");
-            s.list_builds = scalar_of<long>(d, "list_builds");
-            s.theta = scalar_of<double>(d, "theta");
-            s.omega = scalar_of<double>(d, "omega");
-            s.forces_valid = scalar_of<bool>(d, "forces_valid");
-            const auto t = scalar_of<std::vector<double>>(d, "torque");
-            const auto l = scalar_of<std::vector<double>>(d, "ledger");
-            // a ledger of 4 is a checkpoint from before spring_work was booked
-            if (t.size() != 4 || (l.size() != 4 && l.size() != 5))
-              throw std::invalid_argument("the snapshot's torque or ledger has the wrong length");
-            s.torque = en::Torque{t[0], t[1], t[2], t[3]};
-            s.ledger = en::Ledger{l[0], l[1], l[2], l[3], l.size() == 5 ? l[4] : 0.0};
+            en::Engine::Snapshot::for_each_field(s, SnapshotFromPython{d});
             e.restore(s);
           },
           arg("snapshot"));

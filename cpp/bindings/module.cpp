@@ -6,7 +6,7 @@
 #include <string>
 
 #include "millscope/dsp.hpp"
-#include "millscope/touching_pairs.hpp"
+#include "millscope/engine.hpp"
 
 namespace py = pybind11;
 

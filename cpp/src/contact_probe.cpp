@@ -167,13 +167,9 @@ ProbeResult contact_probe(const ProbeSetup& su) {
   }
   r.dt = su.dt;
 
-  const bool friction = su.friction > 0.0;
-  const bool clamp = su.clamp == NormalClamp::nonnegative;
-  if (friction) {
-    return clamp ? run<HertzMindlinClamped>(su, p, r) : run<HertzMindlin>(su, p, r);
-  }
-  return clamp ? run<HertzMindlinFrictionlessClamped>(su, p, r)
-               : run<HertzMindlinFrictionless>(su, p, r);
+  const Law law = choose_law(p.friction > 0.0, p.restitution < 1.0,
+                            su.clamp == NormalClamp::nonnegative);
+  return with_law(law, [&](auto tag) { return run<typename decltype(tag)::type>(su, p, r); });
 }
 
 }  // namespace millscope::contact

@@ -1,6 +1,9 @@
-// The engine's set-up, state access, observables and checkpoints (engine.hpp). The step loop
-// itself is in engine_kernels.hpp.
+// The engine's set-up, state access, observables and checkpoints (engine.hpp), and the list
+// upkeep the step kernels call (Access). The step loop itself is in src/step/run.hpp.
 #include "millscope/engine.hpp"
+
+#include "engine_access.hpp"
+#include "touching_pairs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,9 +17,7 @@
 #include <utility>
 
 #include "millscope/contact.hpp"
-#include "millscope/engine_kernels.hpp"
 #include "millscope/timestep.hpp"
-#include "millscope/touching_pairs.hpp"
 
 namespace millscope::engine {
 
@@ -120,13 +121,9 @@ Variant choose_variant(const Config& c, const materials::PairTable& table) {
     }
   }
   Variant v;
-  if (c.clamp_normal) {
-    v.law = Variant::Law::clamped;
-  } else if (friction) {
-    v.law = Variant::Law::hertz_mindlin;
-  } else {
-    v.law = damping ? Variant::Law::frictionless : Variant::Law::elastic;
-  }
+  // The engine's clamped kernels carry friction (mu = 0 gives no tangential force): there are
+  // no frictionless clamped ones.
+  v.law = contact::choose_law(friction || c.clamp_normal, damping, c.clamp_normal);
   v.one_material = used.size() == 1;
   v.lifters = c.geometry.lifters > 0;
   v.end_walls = c.geometry.end_walls;
@@ -144,13 +141,13 @@ StepKernel kernel_of(const Variant& v) {
       return kernels::elastic(v.one_material, v.lifters, v.end_walls, v.track_energy);
     case Variant::Law::clamped:
       return kernels::clamped(v.one_material, v.lifters, v.end_walls, v.track_energy);
+    case Variant::Law::frictionless_clamped:
+      break;  // never chosen (choose_variant)
   }
-  throw std::logic_error("unknown contact law");
+  throw std::logic_error("the engine has no step kernels for this contact law");
 }
 
-bool has_friction(const Variant& v) {
-  return v.law == Variant::Law::hertz_mindlin || v.law == Variant::Law::clamped;
-}
+bool has_friction(const Variant& v) { return contact::has_friction(v.law); }
 
 double default_skin(const std::vector<double>& radius) {
   // 0.4 r_min: 5 mm for the pilot mill's 12.5 mm balls, as the LIGGGHTS yardstick uses.
@@ -161,13 +158,24 @@ double default_skin(const std::vector<double>& radius) {
 
 std::string Variant::describe() const {
   static const char* laws[] = {"hertz-mindlin", "hertz-mindlin without friction",
-                               "hertz elastic without friction", "hertz-mindlin, clamped"};
+                               "hertz elastic without friction", "hertz-mindlin, clamped",
+                               "hertz-mindlin without friction, clamped"};
   std::string s = laws[static_cast<int>(law)];
   s += one_material ? ", one material" : ", pair table";
   s += lifters ? ", lifters" : ", no lifters";
   s += end_walls ? ", end walls" : ", periodic ends";
   if (!track_energy && law != Law::elastic) s += ", dissipation not booked";
   return s;
+}
+
+bool wide_pairs_supported() {
+#if MILLSCOPE_WIDE_PAIRS
+  const char* off = std::getenv("MILLSCOPE_NO_WIDE_PAIRS");
+  if (off != nullptr && off[0] != '\0' && !(off[0] == '0' && off[1] == '\0')) return false;
+  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+#else
+  return false;
+#endif
 }
 
 bool Engine::wide_pair_search() const {
@@ -220,7 +228,7 @@ Engine::Engine(Config config)
   variant_ = choose_variant(config_, pairs_);
   kernel_ = kernel_of(variant_);
   const bool friction = has_friction(variant_);
-  list_ = neighbors::VerletList(list_.skin(), friction ? 3 : 0,
+  list_ = neighbors::VerletList(list_.skin(), contact::history_size(variant_.law),
                                 config_.geometry.end_walls ? 0.0 : config_.geometry.length);
 
   for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_, &ty_,
@@ -508,7 +516,7 @@ void for_each_contact(const Engine& e, const materials::PairTable& table, const 
         const auto block = static_cast<std::size_t>(wall_block[i]);
         std::size_t slot = static_cast<std::size_t>(wc.part);
         if (wc.part == drum::Part::lifter) slot = wall_lifter[2 * block] == wc.index ? 3 : 4;
-        hist = wall_history.data() + (block * wall_slots + slot) * 3;
+        hist = wall_history.data() + (block * wall_slots + slot) * hs;
       }
       const auto& p = table(static_cast<std::size_t>(mat[i]), static_cast<std::size_t>(c.drum_material));
       f(p, wc.overlap, r[i], r[i], hist);
@@ -550,13 +558,14 @@ Engine::Snapshot Engine::snapshot() const {
   s.t = copy_out(tx_, ty_, tz_);
   s.x_ref = copy_out(x_ref_, y_ref_, z_ref_);
   // Wall history per particle (slot order), as if every particle had a block.
-  s.wall_history.assign(wall_block_.empty() ? 0 : n_ * wall_slots * 3, 0.0);
+  const std::size_t width = wall_slots * history_size();  // wall history per particle
+  s.wall_history.assign(wall_block_.empty() ? 0 : n_ * width, 0.0);
   s.wall_lifter.assign(2 * n_, -1);
   for (std::size_t i = 0; i < wall_block_.size(); ++i) {
     if (wall_block_[i] < 0) continue;
     const auto b = static_cast<std::size_t>(wall_block_[i]);
-    std::copy_n(wall_history_.begin() + static_cast<std::ptrdiff_t>(b * wall_slots * 3),
-                wall_slots * 3, s.wall_history.begin() + static_cast<std::ptrdiff_t>(i * wall_slots * 3));
+    std::copy_n(wall_history_.begin() + static_cast<std::ptrdiff_t>(b * width), width,
+                s.wall_history.begin() + static_cast<std::ptrdiff_t>(i * width));
     std::copy_n(wall_lifter_.begin() + static_cast<std::ptrdiff_t>(2 * b), 2,
                 s.wall_lifter.begin() + static_cast<std::ptrdiff_t>(2 * i));
   }
@@ -582,7 +591,7 @@ void Engine::restore(const Snapshot& s) {
   };
   for (const auto* a : {&s.x, &s.v, &s.w, &s.f, &s.t, &s.x_ref})
     require(a->size() == n3, "a state array has " + std::to_string(a->size()) + " values, not " + std::to_string(n3));
-  require(s.wall_history.size() == (wall_block_.empty() ? 0 : n_ * wall_slots * 3),
+  require(s.wall_history.size() == (wall_block_.empty() ? 0 : n_ * wall_slots * history_size()),
           "wall history size");
   require(s.wall_lifter.size() == 2 * n_, "wall lifter slots size");
   require(s.step >= 0, "step < 0");
@@ -615,9 +624,10 @@ void Engine::restore(const Snapshot& s) {
   for (std::size_t i = 0; i < wall_held_.size(); ++i) {
     unsigned held = 0;
     for (std::size_t slot = 0; slot < wall_slots; ++slot) {
-      const double* h = &wall_history_[(i * wall_slots + slot) * 3];
-      const bool lifter_held = slot >= 3 && wall_lifter_[2 * i + slot - 3] >= 0;
-      if (lifter_held || h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0) held |= 1u << slot;
+      const double* h = &wall_history_[(i * wall_slots + slot) * history_size()];
+      bool any = slot >= 3 && wall_lifter_[2 * i + slot - 3] >= 0;  // a lifter held
+      for (std::size_t k = 0; k < history_size(); ++k) any = any || h[k] != 0.0;
+      if (any) held |= 1u << slot;
     }
     wall_held_[i] = static_cast<std::uint8_t>(held);
   }
@@ -707,7 +717,7 @@ void Engine::Access::refresh_walls(Engine& e) {
   if (e.wall_block_.empty()) return;  // no friction: no wall history
   // Blocks of wall history for the particles near the shell, an end wall or a lifter, and for
   // any that still holds a contact; packed in particle order, carried over from the old blocks.
-  constexpr std::size_t width = wall_slots * 3;
+  const std::size_t width = wall_slots * e.history_size();
   std::vector<std::int32_t> block(e.n_, -1);
   std::int32_t blocks = 0;
   for (std::size_t i = 0; i < e.n_; ++i) {

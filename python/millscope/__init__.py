@@ -10,7 +10,7 @@ from ._core import build_info as _build_info
 from .calibration.fit import Calibration, FillEstimate, LogFit, estimate_fill, log_fit
 from .calibration.groups import GroupAnalysis, analyze_campaign
 from .calibration.monitoring import WindowEstimate, monitor
-from .campaign import Campaign, Case, CaseResult, RunSettings, studies
+from .campaign import Campaign, Case, CaseResult, RunSettings, read_store, studies
 from .campaign.studies import StudyPlan, StudyResult, run_study
 from .engine.simulation import CheckpointError, SettleWarning, Simulation
 from .model import contact, presets
@@ -80,6 +80,7 @@ __all__ = [
     "monitor",
     "plots",
     "presets",
+    "read_store",
     "report",
     "run_study",
     "spectral_energy",

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
-from typing import Any
+from typing import Any, TypeGuard, TypeVar
 
 import numpy as np
 
@@ -20,10 +20,12 @@ __all__ = ["MAX_LIFTERS", "as_float", "between", "choice", "count", "fail", "fla
 
 #: The most lifter bars a drum may have (a bar every 3 mm of the shell of a 10 m drum); here,
 #: below both the scene (model) and the spectra (signal), which check it.
+_Choice = TypeVar("_Choice", bound=str)
+
 MAX_LIFTERS = 10_000
 
 
-def _is_number(value: object) -> bool:
+def _is_number(value: object) -> TypeGuard[Real]:
     return isinstance(value, Real) and not isinstance(value, bool)
 
 
@@ -33,7 +35,7 @@ def as_float(value: object) -> float:
     if not _is_number(value):
         return math.nan
     try:
-        return float(value)  # type: ignore[arg-type]
+        return float(value)
     except OverflowError:
         return math.inf
 
@@ -41,12 +43,12 @@ def as_float(value: object) -> float:
 def show(value: object) -> str:
     """A value as error messages print it: numbers plainly (no ``np.float64(...)``), long
     values cut short."""
-    if isinstance(value, Integral) and _is_number(value):
+    if _is_number(value) and isinstance(value, Integral):
         n = int(value)
         text = str(n) if abs(n) < 10**30 else \
             f"{'-' if n < 0 else ''}~1e{int(abs(n).bit_length() * math.log10(2))}"
     elif _is_number(value):
-        text = repr(float(value))  # type: ignore[arg-type]
+        text = repr(float(value))
     else:
         text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
@@ -97,9 +99,8 @@ def integer(where: str, value: object, error: type[ValueError], *, low: int,
             high: int | None = None, why: str = "") -> int:
     """``value`` as an int when it is an integer (not a bool, not a float) in [low, high],
     else ``error``."""
-    ok = isinstance(value, Integral) and _is_number(value)
-    n = int(value) if ok else 0  # type: ignore[call-overload]
-    if not ok or n < low or (high is not None and n > high):
+    n = int(value) if _is_number(value) and isinstance(value, Integral) else None
+    if n is None or n < low or (high is not None and n > high):
         valid = f">= {low}" if high is None else f"in [{low}, {high}]"
         reason = f" ({why})" if why else ""
         raise error(f"{where} = {show(value)} is not valid; it must be an integer "
@@ -188,10 +189,13 @@ def text(where: str, value: object, *, empty: bool = False) -> str:
     return value
 
 
-def choice(where: str, value: object, choices: tuple[str, ...]) -> str:
-    if not isinstance(value, str) or value not in choices:
-        raise fail(where, value, f"one of {', '.join(repr(c) for c in choices)}")
-    return value
+def choice(where: str, value: object, choices: tuple[_Choice, ...]) -> _Choice:
+    """``value`` when it is one of ``choices`` (typed as they are, e.g. a Literal), else the
+    error naming ``where``, the value and the choices."""
+    for c in choices:
+        if isinstance(value, str) and value == c:
+            return c
+    raise fail(where, value, f"one of {', '.join(repr(c) for c in choices)}")
 
 
 def tuple_of(where: str, value: object, kind: type, what: str) -> tuple[Any, ...]:

@@ -1,11 +1,22 @@
-"""Type stubs of the private C++ extension (see cpp/bindings/)."""
+"""Type stubs of the private C++ extension (see cpp/bindings/).
 
-from typing import Any, Literal, TypedDict
+Checked against the compiled module by tests/test_typing.py (mypy's stubtest, and the
+signatures pybind11 writes into each docstring). Every class has pybind11's metaclass; the
+classes without a constructor here cannot be made from Python (pybind11's placeholder
+``__init__`` raises TypeError), and their attributes are read-only.
+"""
+
+from typing import Any, Literal, TypeAlias, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-class WindowFactors:
+class _pybind11_type(type):  # stub only: pybind11_builtins.pybind11_type, the metaclass
+    ...
+
+_Vec3: TypeAlias = ArrayLike  # stub only: three floats
+
+class WindowFactors(metaclass=_pybind11_type):
     @property
     def coherent_gain(self) -> float: ...
     @property
@@ -15,7 +26,7 @@ class WindowFactors:
     @property
     def mainlobe_half_bins(self) -> float: ...
 
-class Peak:
+class Peak(metaclass=_pybind11_type):
     @property
     def frequency_hz(self) -> float: ...
     @property
@@ -27,7 +38,7 @@ class Peak:
     @property
     def local_maximum(self) -> bool: ...
 
-class BandMask:
+class BandMask(metaclass=_pybind11_type):
     @property
     def keep(self) -> list[bool]: ...
     @property
@@ -41,7 +52,7 @@ class BandMask:
     @property
     def subtract_mean(self) -> bool: ...
 
-class EnergyEstimate:
+class EnergyEstimate(metaclass=_pybind11_type):
     @property
     def energy(self) -> float: ...
     @property
@@ -62,14 +73,13 @@ def band_stop(x: ArrayLike, window: str, mask: BandMask) -> NDArray[np.float64]:
 
 # -- materials, contact law, time step (cpp/bindings/bind_contact.cpp) -------------------------
 
-Vec3 = ArrayLike  # three floats
-
 DEFAULT_DT_FRACTION: float
 MAX_DT_FRACTION: float
 GUARD_INTERVAL: int
 WIDE_BLOCK_LISTED: int
+SNAPSHOT_ARRAYS: tuple[str, ...]
 
-class Material:
+class Material(metaclass=_pybind11_type):
     def __init__(self, density: float, shear_modulus: float, poisson: float) -> None: ...
     @property
     def density(self) -> float: ...
@@ -80,7 +90,7 @@ class Material:
     @property
     def youngs(self) -> float: ...
 
-class PairConstants:
+class PairConstants(metaclass=_pybind11_type):
     @property
     def e_star(self) -> float: ...
     @property
@@ -94,7 +104,7 @@ class PairConstants:
     @property
     def damping_factor(self) -> float: ...
 
-class PairTable:
+class PairTable(metaclass=_pybind11_type):
     def __init__(self, materials: list[Material], restitution: list[list[float]],
                  friction: list[list[float]]) -> None: ...
     def get(self, i: int, j: int) -> PairConstants: ...
@@ -102,38 +112,67 @@ class PairTable:
     @property
     def size(self) -> int: ...
 
-class ContactEvaluation:
-    touching: bool
-    overlap: float
-    n: NDArray[np.float64]
-    force_i: NDArray[np.float64]
-    torque_i: NDArray[np.float64]
-    torque_j: NDArray[np.float64]
-    normal: float
-    tangential: NDArray[np.float64]
-    sliding: bool
-    history: list[float]
+class ContactEvaluation(metaclass=_pybind11_type):
+    @property
+    def touching(self) -> bool: ...
+    @property
+    def overlap(self) -> float: ...
+    @property
+    def n(self) -> NDArray[np.float64]: ...
+    @property
+    def force_i(self) -> NDArray[np.float64]: ...
+    @property
+    def torque_i(self) -> NDArray[np.float64]: ...
+    @property
+    def torque_j(self) -> NDArray[np.float64]: ...
+    @property
+    def normal(self) -> float: ...
+    @property
+    def tangential(self) -> NDArray[np.float64]: ...
+    @property
+    def sliding(self) -> bool: ...
+    @property
+    def history(self) -> list[float]: ...
 
-class ProbeResult:
-    restitution: float
-    contact_time: float
-    contact_steps: int
-    sliding_steps: int
-    dt: float
-    max_overlap: float
-    normal_impulse: float
-    normal_impulse_abs: float
-    tangential_impulse: float
-    tangential_velocity: float
-    slip_velocity: float
-    spin_a: float
-    spin_b: float
-    kinetic_energy_before: float
-    kinetic_energy_after: float
-    hertz_contact_time: float
-    hertz_max_overlap: float
-    m_star: float
-    r_star: float
+class ProbeResult(metaclass=_pybind11_type):
+    @property
+    def restitution(self) -> float: ...
+    @property
+    def contact_time(self) -> float: ...
+    @property
+    def contact_steps(self) -> int: ...
+    @property
+    def sliding_steps(self) -> int: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def max_overlap(self) -> float: ...
+    @property
+    def normal_impulse(self) -> float: ...
+    @property
+    def normal_impulse_abs(self) -> float: ...
+    @property
+    def tangential_impulse(self) -> float: ...
+    @property
+    def tangential_velocity(self) -> float: ...
+    @property
+    def slip_velocity(self) -> float: ...
+    @property
+    def spin_a(self) -> float: ...
+    @property
+    def spin_b(self) -> float: ...
+    @property
+    def kinetic_energy_before(self) -> float: ...
+    @property
+    def kinetic_energy_after(self) -> float: ...
+    @property
+    def hertz_contact_time(self) -> float: ...
+    @property
+    def hertz_max_overlap(self) -> float: ...
+    @property
+    def m_star(self) -> float: ...
+    @property
+    def r_star(self) -> float: ...
 
 def pair_constants(material_a: Material, material_b: Material, restitution: float,
                    friction: float) -> PairConstants: ...
@@ -150,18 +189,18 @@ def contact_probe(material_a: Material, material_b: Material, wall: bool, radius
                   radius_b: float, restitution: float, friction: float, speed: float,
                   tangential_speed: float, spin: float, dt: float,
                   clamp_normal: bool) -> ProbeResult: ...
-def sphere_contact(constants: PairConstants, x_i: Vec3, v_i: Vec3, w_i: Vec3, radius_i: float,
-                   mass_i: float, x_j: Vec3, v_j: Vec3, w_j: Vec3, radius_j: float, mass_j: float,
-                   history: list[float], dt: float, friction: bool = True,
+def sphere_contact(constants: PairConstants, x_i: _Vec3, v_i: _Vec3, w_i: _Vec3, radius_i: float,
+                   mass_i: float, x_j: _Vec3, v_j: _Vec3, w_j: _Vec3, radius_j: float,
+                   mass_j: float, history: list[float], dt: float, friction: bool = True,
                    clamp_normal: bool = False) -> ContactEvaluation: ...
-def wall_contact(constants: PairConstants, x_i: Vec3, v_i: Vec3, w_i: Vec3, radius_i: float,
-                 mass_i: float, normal: Vec3, overlap: float, wall_velocity: Vec3,
+def wall_contact(constants: PairConstants, x_i: _Vec3, v_i: _Vec3, w_i: _Vec3, radius_i: float,
+                 mass_i: float, normal: _Vec3, overlap: float, wall_velocity: _Vec3,
                  history: list[float], dt: float, friction: bool = True,
                  clamp_normal: bool = False) -> ContactEvaluation: ...
 
 # -- drum geometry (cpp/bindings/bind_drum.cpp) ------------------------------------------------
 
-class DrumGeometry:
+class DrumGeometry(metaclass=_pybind11_type):
     """Lifters are trapezoidal when lifter_top_width is given (width at the tip, in
     (0, lifter_width]), rectangular when it is None."""
     def __init__(self, radius: float, length: float, end_walls: bool, lifters: int,
@@ -192,21 +231,25 @@ class _DrumContact(TypedDict):  # stub only: the dicts drum_contacts returns
     normal: NDArray[np.float64]
     point: NDArray[np.float64]
 
-def drum_contacts(geometry: DrumGeometry, theta: float, x: Vec3,
+def drum_contacts(geometry: DrumGeometry, theta: float, x: _Vec3,
                   radius: float) -> list[_DrumContact]: ...
 
-class VerletList:
+class VerletList(metaclass=_pybind11_type):
     def __init__(self, skin: float, history_size: int, period_z: float = 0.0) -> None: ...
     def build(self, x: ArrayLike, y: ArrayLike, z: ArrayLike, r: ArrayLike,
               team: int = 1) -> None: ...
     def pairs(self) -> NDArray[np.int64]: ...
+    def spatial_order(self, x: ArrayLike, y: ArrayLike, z: ArrayLike,
+                      r: ArrayLike) -> NDArray[np.uint32]:
+        """The particles cell by cell (the order the engine stores them in at a list build):
+        order[k] is the particle to store at k."""
     history: NDArray[np.float64]
     @property
     def builds(self) -> int: ...
     @property
     def skin(self) -> float: ...
 
-class Engine:
+class Engine(metaclass=_pybind11_type):
     def __init__(self, materials: list[Material], restitution: ArrayLike, friction: ArrayLike,
                  drum_material: int, geometry: Any, radius: ArrayLike, material: ArrayLike,
                  dt: float, gravity: float = 9.81, skin: float = 0.0, clamp_normal: bool = False,
@@ -222,6 +265,8 @@ class Engine:
     def threads(self) -> int: ...
     @property
     def variant(self) -> str: ...
+    @property
+    def history_size(self) -> int: ...
     @property
     def track_energy(self) -> bool: ...
     @property

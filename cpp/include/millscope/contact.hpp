@@ -90,9 +90,17 @@ struct HertzElastic {
     double force;      // F_ne, N, along n (>= 0)
     double stiffness;  // S_n, N/m
   };
-  static Result evaluate(const PairConstants& p, const Kinematics& k) {
-    const double s_n = 2.0 * p.e_star * k.sqrt_rd;   // (4)
-    return Result{(2.0 / 3.0) * s_n * k.d_n, s_n};   // (1)
+  /// S_n (4), N/m, from sqrt(R* d_n), m.
+  MILLSCOPE_HOT_INLINE static double stiffness(const PairConstants& p, double sqrt_rd) {
+    return 2.0 * p.e_star * sqrt_rd;
+  }
+  /// F_ne (1), N, from S_n and d_n.
+  MILLSCOPE_HOT_INLINE static double force(double s_n, double d_n) {
+    return (2.0 / 3.0) * s_n * d_n;
+  }
+  MILLSCOPE_HOT_INLINE static Result evaluate(const PairConstants& p, const Kinematics& k) {
+    const double s_n = stiffness(p, k.sqrt_rd);
+    return Result{force(s_n, k.d_n), s_n};
   }
   /// Elastic energy stored at overlap d_n, the integral of (1): 8/15 E* sqrt(R*) d_n^(5/2), J.
   static double energy(const PairConstants& p, double sqrt_rd, double d_n) {
@@ -108,7 +116,8 @@ struct HertzElastic {
 struct ViscousDamping {
   static constexpr std::size_t history_size = 0;
   static constexpr bool active = true;
-  static double gamma(const PairConstants& p, double stiffness, double m_star) {
+  MILLSCOPE_HOT_INLINE static double gamma(const PairConstants& p, double stiffness,
+                                            double m_star) {
     return p.damping_factor * std::sqrt(stiffness * m_star);
   }
 };
@@ -156,6 +165,51 @@ struct MindlinFriction {
   static constexpr std::size_t history_size = 3;
   static constexpr bool active = true;
 
+  // The law's steps, one function each, shared with the engine's lane kernel
+  // (contact_forces_in_lanes): three doubles each rather than vectors, so that a loop over
+  // contacts computes several in the lanes of one instruction.
+
+  /// S_t (6), N/m, from sqrt(R* d_n), m.
+  MILLSCOPE_HOT_INLINE static double stiffness(const PairConstants& p, double sqrt_rd) {
+    return 8.0 * p.g_star * sqrt_rd;
+  }
+  /// Turns the spring d_t into the tangent plane of the unit normal n, its length kept (an
+  /// empty or exactly normal spring becomes zero), and returns |d_t|^2, m^2, from before.
+  MILLSCOPE_HOT_INLINE static double turn(double& sx, double& sy, double& sz, double nx,
+                                          double ny, double nz) {
+    const double before2 = sx * sx + sy * sy + sz * sz;
+    const double along = sx * nx + sy * ny + sz * nz;
+    sx -= along * nx, sy -= along * ny, sz -= along * nz;
+    const double after2 = sx * sx + sy * sy + sz * sz;
+    const double keep = after2 > 0.0 ? std::sqrt(before2 / after2) : 0.0;
+    sx *= keep, sy *= keep, sz *= keep;
+    return before2;
+  }
+  /// Advances the spring by the slip v_t over dt, s.
+  MILLSCOPE_HOT_INLINE static void advance(double& sx, double& sy, double& sz, double vtx,
+                                           double vty, double vtz, double dt) {
+    sx += vtx * dt, sy += vty * dt, sz += vtz * dt;
+  }
+  /// The trial force F_te + F_td = -S_t d_t - gamma_t v_t, N ((5), (7)).
+  MILLSCOPE_HOT_INLINE static void trial(double s_t, double gamma_t, double sx, double sy,
+                                         double sz, double vtx, double vty, double vtz,
+                                         double& fx, double& fy, double& fz) {
+    fx = -s_t * sx + -gamma_t * vtx;
+    fy = -s_t * sy + -gamma_t * vty;
+    fz = -s_t * sz + -gamma_t * vtz;
+  }
+  /// The Coulomb limit (8): F_t scaled down to mu |F_n| along itself where it exceeds it
+  /// (branch-free: a factor 1 otherwise); returns whether it did (sliding).
+  MILLSCOPE_HOT_INLINE static bool limit(const PairConstants& p, double f_n, double& fx,
+                                         double& fy, double& fz) {
+    const double bound = p.friction * std::abs(f_n);
+    const double f2 = fx * fx + fy * fy + fz * fz;
+    const bool sliding = f2 > bound * bound;
+    const double scale = sliding ? bound / std::sqrt(f2) : 1.0;  // f2 > bound^2 >= 0 if used
+    fx *= scale, fy *= scale, fz *= scale;
+    return sliding;
+  }
+
   /// gamma_n: the normal dashpot's coefficient gamma(S_n) (0 without damping); the tangential
   /// one follows from it, gamma(S_t) = gamma_n sqrt(S_t / S_n) (PairConstants).
   /// Books: also the ledger's terms. The spring's energy S_t |d_t|^2 / 2 changes over a step by
@@ -174,31 +228,25 @@ struct MindlinFriction {
                                                         double gamma_n, double dt,
                                                         double* history) {
     Eigen::Map<Vec3> d_t(history);
-    const double s_t = 8.0 * p.g_star * k.sqrt_rd;  // (6)
-    // Rotate into the current tangent plane, keeping the magnitude.
-    const double before2 = d_t.squaredNorm();
-    d_t -= d_t.dot(k.n) * k.n;
-    const double after2 = d_t.squaredNorm();
-    // after2 == 0 only for an empty (or exactly normal) history: nothing to keep.
-    d_t *= after2 > 0.0 ? std::sqrt(before2 / after2) : 0.0;
-    d_t += k.v_t * dt;
+    const double s_t = stiffness(p, k.sqrt_rd);  // (6)
+    const double before2 = turn(d_t.x(), d_t.y(), d_t.z(), k.n.x(), k.n.y(), k.n.z());
+    advance(d_t.x(), d_t.y(), d_t.z(), k.v_t.x(), k.v_t.y(), k.v_t.z(), dt);
 
-    Vec3 f_t = -s_t * d_t;  // (5)
+    // gamma(S_t), (7); 0 without damping, so that the trial force is the spring's (5) alone
+    const double gamma_t = Damping::active ? gamma_n * p.tangential_damping_ratio : 0.0;
+    Vec3 f_t;
+    trial(s_t, gamma_t, d_t.x(), d_t.y(), d_t.z(), k.v_t.x(), k.v_t.y(), k.v_t.z(), f_t.x(),
+          f_t.y(), f_t.z());
     double damping_power = 0.0;
     Vec3 dissipative = Vec3::Zero();
     if constexpr (Damping::active) {
-      const double gamma_t = gamma_n * p.tangential_damping_ratio;  // gamma(S_t), (7)
       dissipative = -gamma_t * k.v_t;  // (7)
-      f_t += dissipative;
       damping_power = gamma_t * k.v_t.squaredNorm();
     }
 
-    const double limit = p.friction * std::abs(f_n);  // (8)
-    const double f2 = f_t.squaredNorm();
-    const bool sliding = f2 > limit * limit;
+    const bool sliding = limit(p, f_n, f_t.x(), f_t.y(), f_t.z());  // (8)
     if (sliding) {
-      f_t *= limit / std::sqrt(f2);  // f2 > limit^2 >= 0, so f2 > 0
-      d_t = -f_t / s_t;              // s_t > 0 whenever d_n > 0
+      d_t = -f_t / s_t;  // s_t > 0 whenever d_n > 0
       damping_power = 0.0;
       dissipative = f_t;
     }
@@ -224,7 +272,7 @@ struct MindlinFriction {
   }
   /// Energy held by the tangential spring, S_t |d_t|^2 / 2, J (S_t at the current overlap).
   static double energy(const PairConstants& p, double sqrt_rd, const double* history) {
-    const double s_t = 8.0 * p.g_star * sqrt_rd;  // (6)
+    const double s_t = stiffness(p, sqrt_rd);  // (6)
     return 0.5 * s_t * Eigen::Map<const Vec3>(history).squaredNorm();
   }
 };
@@ -343,12 +391,17 @@ struct ContactLaw {
     for (std::size_t i = 0; i < history_size; ++i) history[i] = 0.0;
   }
 
+  /// Whether the history holds anything (a contact under way, or one that has just ended).
+  static bool holds(const double* history) {
+    bool held = false;
+    for (std::size_t i = 0; i < history_size; ++i) held |= history[i] != 0.0;
+    return held;
+  }
+
   /// reset() for a pair that may long have been apart: writes only when something is held, so
   /// the hot loop does not dirty the history of every listed pair that does not touch.
   static void clear(double* history) {
-    bool held = false;
-    for (std::size_t i = 0; i < history_size; ++i) held |= history[i] != 0.0;
-    if (held) reset(history);
+    if (holds(history)) reset(history);
   }
 };
 
@@ -363,6 +416,61 @@ using HertzMindlinClamped =
     ContactLaw<HertzElastic, ViscousDamping, MindlinFriction, NoRolling, NormalClamp::nonnegative>;
 using HertzMindlinFrictionlessClamped =
     ContactLaw<HertzElastic, ViscousDamping, NoFriction, NoRolling, NormalClamp::nonnegative>;
+
+// ---------------------------------------------------------------------------------------------
+// The choice of a law: made once, here, for the engine, the impact probe and the bindings
+// ---------------------------------------------------------------------------------------------
+
+/// The laws above as a value.
+enum class Law : int {
+  hertz_mindlin = 0,         // HertzMindlin
+  frictionless = 1,          // HertzMindlinFrictionless
+  elastic = 2,               // HertzElasticFrictionless
+  clamped = 3,               // HertzMindlinClamped
+  frictionless_clamped = 4,  // HertzMindlinFrictionlessClamped
+};
+
+/// The law for contacts of which some have friction (mu > 0) and some damping (e < 1), with
+/// the normal force clamped at zero or not: the cheapest law that computes them.
+constexpr Law choose_law(bool friction, bool damping, bool clamp) {
+  if (clamp) return friction ? Law::clamped : Law::frictionless_clamped;
+  if (friction) return Law::hertz_mindlin;
+  return damping ? Law::frictionless : Law::elastic;
+}
+
+/// A law's type as a value, for with_law.
+template <class L>
+struct LawTag {
+  using type = L;
+};
+
+/// Calls f(LawTag<the law's type>{}) and returns what it returns.
+template <class F>
+auto with_law(Law law, F&& f) {
+  switch (law) {
+    case Law::hertz_mindlin:
+      return f(LawTag<HertzMindlin>{});
+    case Law::frictionless:
+      return f(LawTag<HertzMindlinFrictionless>{});
+    case Law::elastic:
+      return f(LawTag<HertzElasticFrictionless>{});
+    case Law::clamped:
+      return f(LawTag<HertzMindlinClamped>{});
+    case Law::frictionless_clamped:
+      break;
+  }
+  return f(LawTag<HertzMindlinFrictionlessClamped>{});
+}
+
+/// Whether the law has a tangential part (and so torques).
+inline bool has_friction(Law law) {
+  return with_law(law, [](auto tag) { return decltype(tag)::type::has_friction; });
+}
+
+/// Doubles of history per contact the law keeps (ContactLaw::history_size).
+inline std::size_t history_size(Law law) {
+  return with_law(law, [](auto tag) { return decltype(tag)::type::history_size; });
+}
 
 // ---------------------------------------------------------------------------------------------
 // Whole-pair evaluation: geometry, contact-point velocity, force and torques

@@ -16,7 +16,7 @@
 // What a scene does not use costs nothing: the contact law (friction or none, damping or none,
 // clamped or not), one material or a pair table, lifters or none, end walls or periodic ends
 // are template parameters of the step kernel, chosen once when the engine is made
-// (engine_kernels.hpp, instantiated in src/engine_*.cpp).
+// (src/step/run.hpp, instantiated in the generated engine_law_*.cpp).
 //
 // Storage order: at every neighbour-list build the particles are re-stored in cell order
 // (neighbors::VerletList::spatial_order; Config::reorder), so that contacting particles sit
@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "millscope/contact.hpp"
 #include "millscope/drum.hpp"
 #include "millscope/materials.hpp"
 #include "millscope/neighbors.hpp"
@@ -119,7 +120,7 @@ struct Ledger {
 
 /// Which specialised step kernel a scene needs (docs/architecture.md, What a scene pays for).
 struct Variant {
-  enum class Law : int { hertz_mindlin = 0, frictionless = 1, elastic = 2, clamped = 3 };
+  using Law = contact::Law;  // contact::choose_law; never frictionless_clamped (see engine.cpp)
   Law law = Law::hertz_mindlin;
   bool one_material = false;
   bool lifters = false;
@@ -138,6 +139,16 @@ struct Variant {
 /// every guard_interval-th step instead of every step keeps the guards' cost well below 1 % of
 /// a step.
 inline constexpr long guard_interval = 8;
+
+/// The pair pass with the wide search (src/touching_pairs.hpp) takes blocks of rows holding at
+/// most this many listed pairs (or one row that holds more): about 70 contacts in the pilot
+/// mill's charges.
+inline constexpr std::size_t wide_block_listed = 224;
+
+/// Whether this build and this CPU run the wide pair search (src/touching_pairs.hpp). Setting
+/// the environment variable MILLSCOPE_NO_WIDE_PAIRS (to anything but "" or "0") turns it off,
+/// so that the portable search can be run and tested on a CPU that has AVX-512.
+bool wide_pairs_supported();
 
 /// Wall contact history per particle: shell, low end, high end, and two lifter slots.
 inline constexpr std::size_t wall_slots = 5;
@@ -180,6 +191,9 @@ class Engine {
   double dt() const { return dt_; }
   int threads() const { return threads_; }
   const Variant& variant() const { return variant_; }
+  /// Doubles of history per contact, of a pair and of a wall slot: the law's
+  /// (contact::history_size; 0 without friction).
+  std::size_t history_size() const { return list_.history_size(); }
   const drum::Geometry& geometry() const { return config_.geometry; }
   double skin() const { return list_.skin(); }
   double max_speed() const { return config_.max_speed; }      // guard, m/s
@@ -254,7 +268,7 @@ class Engine {
     std::vector<std::uint32_t> order;
     std::vector<double> x, v, w, f, t;  // n x 3 each
     std::vector<double> x_ref;          // n x 3, positions at the last list build
-    std::vector<double> wall_history;   // n x wall_slots x 3
+    std::vector<double> wall_history;   // n x wall_slots x history_size()
     std::vector<std::int32_t> wall_lifter;  // n x 2
     std::vector<std::uint32_t> list_start, list_partner;
     std::vector<double> list_history;
@@ -263,11 +277,38 @@ class Engine {
     bool forces_valid = false;
     Torque torque;
     Ledger ledger;
+
+    /// Calls f(key, field) for every field in a fixed order: the one list of the snapshot's
+    /// keys (the bindings' snapshot and restore, and through them a checkpoint's members).
+    template <class S, class F>
+    static void for_each_field(S& s, F&& f) {
+      f("order", s.order);
+      f("x", s.x);
+      f("v", s.v);
+      f("w", s.w);
+      f("f", s.f);
+      f("t", s.t);
+      f("x_ref", s.x_ref);
+      f("wall_history", s.wall_history);
+      f("wall_lifter", s.wall_lifter);
+      f("list_start", s.list_start);
+      f("list_partner", s.list_partner);
+      f("list_history", s.list_history);
+      f("step", s.step);
+      f("rotation_start", s.rotation_start);
+      f("last_sample_offset", s.last_sample_offset);
+      f("list_builds", s.list_builds);
+      f("theta", s.theta);
+      f("omega", s.omega);
+      f("forces_valid", s.forces_valid);
+      f("torque", s.torque);
+      f("ledger", s.ledger);
+    }
   };
   Snapshot snapshot() const;
   void restore(const Snapshot& s);
 
-  // ---- used by the step kernels (engine_kernels.hpp)
+  // ---- used by the step kernels (src/engine_access.hpp, src/step/)
   struct Access;
 
  private:
@@ -294,10 +335,11 @@ class Engine {
   // has moved, and the step kernel allows for their rounding (ref_rounding()).
   std::vector<float> x_ref_, y_ref_, z_ref_;
   // Wall contact history, kept only for the particles near the drum (friction only): particle
-  // i owns block wall_block_[i] (-1: none) of wall_slots x 3 doubles in wall_history_ and of 2
-  // lifter indices (-1: free) in wall_lifter_. Re-packed by Access::refresh_walls.
+  // i owns block wall_block_[i] (-1: none) of wall_slots x history_size() doubles in
+  // wall_history_ and of 2 lifter indices (-1: free) in wall_lifter_. Re-packed by
+  // Access::refresh_walls.
   std::vector<std::int32_t> wall_block_;      // n
-  std::vector<double> wall_history_;          // blocks x wall_slots x 3
+  std::vector<double> wall_history_;          // blocks x wall_slots x history_size()
   std::vector<std::int32_t> wall_lifter_;     // blocks x 2: lifter index of each lifter slot
   std::vector<std::uint32_t> order_;          // n: the caller's index of the particle in slot k
   std::vector<std::uint8_t> wall_held_;       // n: bit s set while wall slot s holds a contact

@@ -5,22 +5,28 @@ estimate per window of a long record), ``report`` (a campaign store's report), `
 main job: a small DEM campaign and its report), ``bench`` (engine throughput,
 :mod:`millscope.bench`), ``advise`` (contact times against dt and the torque sampling,
 :mod:`millscope.stiffness`), ``study accuracy`` (error against run time of the engine's
-settings, :mod:`millscope.studies`).
+settings, :mod:`millscope.studies`). The commands that print results (analyze, monitor,
+report, demo, study accuracy) print them as CSV or JSON with ``--format csv|json``.
 Bad input ends with one line ``millscope: error: ...`` on stderr and exit code 2.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from .. import __version__
+from .._frames import FORMATS
+
+if TYPE_CHECKING:
+    from pandas import DataFrame
 
 EXIT_BAD_INPUT = 2
 T = TypeVar("T")
@@ -49,6 +55,25 @@ def _positive_int(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r} is not valid; it must be >= 1")
     return value
+
+
+def _add_format_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """``--format``: the command's own text, or ``what`` as CSV or JSON on stdout."""
+    p.add_argument("--format", default="text", choices=FORMATS,
+                   help=f"text (default), or {what} as a table: csv (a header line) or json (a "
+                        "list of records), on stdout; other messages then go to stderr")
+
+
+def _note(args: argparse.Namespace, text: str) -> None:
+    """A message line: on stdout with the text format, on stderr when stdout holds a table."""
+    print(text, file=sys.stdout if args.format == "text" else sys.stderr)
+
+
+def _print_table(table: DataFrame, fmt: str) -> None:
+    """``table`` on stdout as CSV or JSON (:func:`millscope._frames.frame_text`)."""
+    from .._frames import frame_text
+
+    sys.stdout.write(frame_text(table, fmt))
 
 
 def cmd_info(_: argparse.Namespace) -> int:
@@ -89,8 +114,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     # only the band itself is counted, from a record decimated to 2.5x the band when faster
     record = decimate_record(raw, args.band_hz)
     if record is not raw:
-        print(f"decimated from {raw.sample_rate_hz:g} Hz to {record.sample_rate_hz:g} Hz "
-              "(anti-aliased)")
+        _note(args, f"decimated from {raw.sample_rate_hz:g} Hz to {record.sample_rate_hz:g} Hz "
+                    "(anti-aliased)")
     start, end = float(record.time_s[0]), float(record.time_s[-1] + record.dt)
     for option, value in (("--from", args.t_from), ("--to", args.t_to)):
         # a block past the record's ends would silently be cut to them
@@ -105,10 +130,18 @@ def cmd_analyze(args: argparse.Namespace) -> int:
                            lines_hz=lines, window=args.window, bandwidth=args.bandwidth,
                            search_hz=args.search_hz, resolution_hz=args.resolution,
                            band_hz=(0.0, min(args.band_hz, block.sample_rate_hz / 2)))
-    print(f"file                   {args.file}")
-    print(f"block                  {t1:g} .. {t2:g} s, {len(block)} samples at "
-          f"{block.sample_rate_hz:g} Hz")
-    print(result.summary())
+    if args.format == "text":
+        print(f"file                   {args.file}")
+        print(f"block                  {t1:g} .. {t2:g} s, {len(block)} samples at "
+              f"{block.sample_rate_hz:g} Hz")
+        print(result.summary())
+    else:
+        table = result.to_frame()
+        for k, (name, value) in enumerate((("file", str(args.file)), ("block_start_s", t1),
+                                           ("block_end_s", t2), ("samples", len(block)),
+                                           ("sample_rate_hz", block.sample_rate_hz))):
+            table.insert(k, name, [value])
+        _print_table(table, args.format)
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -123,7 +156,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     fig = plots.plot_filtered(block, filtered)
     written.append(plots.save_figure(fig, out / f"{stem}_filtered.png"))
     for path in written:
-        print(f"wrote                  {path}")
+        _note(args, f"wrote                  {path}")
     return 0
 
 
@@ -148,6 +181,11 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         warnings.simplefilter("always")
         result = monitor_record(record, calibration, step_s=args.step, drive=drive,
                                 confidence=args.confidence, band_hz=args.band_hz)
+    if args.format != "text":
+        for caught_warning in caught:
+            print(f"millscope: warning: {caught_warning.message}", file=sys.stderr)
+        _print_table(result.to_frame(), args.format)
+        return 0
     fit = calibration.fit
     label = f"{calibration.label} " if calibration.label else ""
     decimated = ("" if result.decimated_from_hz is None else
@@ -174,18 +212,43 @@ def cmd_monitor(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    """The report of a campaign store; exit code 2 with one error line naming the case files
-    it could not read, after writing the report of the others."""
-    from ..report.reports import UnreadableCasesError, write_report
+    """The report of a campaign store, or of a study's folder (its plan, ``study.json``, and
+    its store): exit code 2 with one error line naming the case files it could not read,
+    after writing the report of the others."""
+    from ..campaign.runs import read_store
+    from ..campaign.studies import PLAN_FILE, read_study
+    from ..report.reports import UnreadableCasesError, write_report, write_study
 
+    folder = Path(args.store)
+    if folder.name == "store" and (folder.parent / PLAN_FILE).is_file():
+        folder = folder.parent  # a study's store: report the study
+    if (folder / PLAN_FILE).is_file():
+        if args.block is not None:
+            raise CliError("--block is not valid for a study: each setting's block is in "
+                           f"its plan ({folder / PLAN_FILE})")
+        try:
+            result = read_study(folder)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+        assert result.plan is not None  # read from a plan file
+        quantity = "energy_ratio" if len(result.plan.load_levels) > 1 else "energy"
+        written = write_study(result, args.out or folder, quantity=quantity, cost=args.cost)
+        _print_study(args, result, quantity)
+        for path in written:
+            _note(args, f"wrote {path}")
+        return 0
+    block = None if args.block is None else tuple(args.block)
+    unreadable = None
     try:
-        path = write_report(args.store, args.out, progress=not args.no_progress,
-                            block=None if args.block is None else tuple(args.block),
+        path = write_report(args.store, args.out, progress=not args.no_progress, block=block,
                             bootstrap=args.bootstrap)
     except UnreadableCasesError as exc:
-        print(f"wrote {exc.report}")
-        raise
-    print(f"wrote {path}")
+        path, unreadable = exc.report, exc
+    _note(args, f"wrote {path}")
+    if args.format != "text":  # the store's cases, those it cannot read included
+        _print_table(read_store(args.store, block=block), args.format)
+    if unreadable is not None:
+        raise unreadable
     return 0
 
 
@@ -207,6 +270,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from .demo import DemoPlan, run_demo, run_synthetic_demo
 
     if args.synthetic:
+        if args.format != "text":
+            raise CliError(f"--format {args.format} is not valid with --synthetic, which runs "
+                           "no campaign; it must be text")
         run_synthetic_demo(Path(args.out), progress=not args.no_progress)
         return 0
     given = {"scale": args.scale, "particles": args.particles, "speed_fraction": args.speed,
@@ -214,16 +280,24 @@ def cmd_demo(args: argparse.Namespace) -> int:
              "duration_s": args.duration, "warm_up_s": args.warm_up, "seed": args.seed,
              "threads": args.threads}
     plan = DemoPlan(**{k: v for k, v in given.items() if v is not None})  # else its defaults
-    result = _resumable(lambda: run_demo(Path(args.out), plan, progress=not args.no_progress,
-                                         max_workers=args.workers),
-                        Path(args.out) / "store", "cases")
+    # with a table on stdout, the demo's own messages go to stderr
+    with contextlib.redirect_stdout(sys.stdout if args.format == "text" else sys.stderr):
+        result = _resumable(lambda: run_demo(Path(args.out), plan,
+                                             progress=not args.no_progress,
+                                             max_workers=args.workers),
+                            Path(args.out) / "store", "cases")
     if result is None:
         return EXIT_INTERRUPTED
-    top = max(r.energy for r in result.results)
-    for r in result.results:
-        print(f"  {r.scene.name:<8} mean torque {r.mean_torque:8.2f} N m   E = {r.energy:10.4g} "
-              f"(N m)^2 s   E p.u. = {r.energy / top:.3f}")
-    print(f"campaign {result.wall_time_s:.0f} s; report {result.report}")
+    if args.format == "text":
+        top = max(r.energy for r in result.results)
+        for r in result.results:
+            print(f"  {r.scene.name:<8} mean torque {r.mean_torque:8.2f} N m   "
+                  f"E = {r.energy:10.4g} (N m)^2 s   E p.u. = {r.energy / top:.3f}")
+    else:
+        from ..campaign.tables import CaseResults
+
+        _print_table(CaseResults(result.results).to_frame(), args.format)
+    _note(args, f"campaign {result.wall_time_s:.0f} s; report {result.report}")
     return 0
 
 
@@ -232,9 +306,42 @@ _STUDY_LADDERS = (("dt_fraction", "vary_dt_fraction"), ("shear_modulus_factor", 
                   ("sampling", "vary_sampling"), ("scale", "vary_scale"))
 
 
+#: The knobs of ``study accuracy --also``, as the reference's options name them.
+_ALSO_KNOBS = {"dt-fraction": ("dt_fraction", float), "shear": ("shear_modulus_factor", float),
+               "record": ("record_s", float), "warm-up": ("warm_up_s", float),
+               "sampling": ("sampling", str), "scale": ("scale", str)}
+
+
+def _setting_changes(text: str) -> dict[str, Any]:
+    """``"scale=tiny,shear=0.001"`` as Setting fields, for ``--also``."""
+    out: dict[str, Any] = {}
+    for item in text.split(","):
+        knob, sep, value = item.partition("=")
+        knob = knob.strip()
+        if not sep or knob not in _ALSO_KNOBS or _ALSO_KNOBS[knob][0] in out:
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is not valid; it must be KNOB=VALUE pairs joined by commas, each "
+                f"knob once, of {', '.join(_ALSO_KNOBS)}")
+        name, kind = _ALSO_KNOBS[knob]
+        try:
+            out[name] = kind(value.strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{knob} = {value!r} is not valid; it must be a "
+                                             "number") from None
+    return out
+
+
+def _print_study(args: argparse.Namespace, result: Any, quantity: str) -> None:
+    """A study's table on stdout: Markdown, or the frame as CSV or JSON (--format)."""
+    if args.format == "text":
+        print(result.to_markdown(quantity, args.cost))
+    else:
+        _print_table(result.to_frame(), args.format)
+
+
 def cmd_study_accuracy(args: argparse.Namespace) -> int:
     """Error against run time: a reference setting and one-knob ladders around it."""
-    from ..campaign.studies import Setting, StudyPlan, run_study
+    from ..campaign.studies import Setting, StudyPlan, run_study, save_study_plan
     from ..report.reports import write_study
 
     reference = Setting(dt_fraction=args.dt_fraction, shear_modulus_factor=args.shear,
@@ -245,30 +352,52 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
     if not ladders:
         raise CliError("give at least one ladder: --vary-dt-fraction, --vary-shear, "
                        "--vary-record, --vary-warm-up, --vary-sampling or --vary-scale")
-    if args.quantity == "slope_a" and len(set(args.levels)) < 2:
-        raise CliError("--quantity slope_a needs 2 or more --levels (and --particles)")
+    extra = [reference.replace(**changes) for changes in args.also or []]
+    if args.quantity in ("slope_a", "energy_ratio") and len(set(args.levels)) < 2:
+        raise CliError(f"--quantity {args.quantity} needs 2 or more --levels (and --particles)")
     plan = StudyPlan.around(reference, ladders, seeds=tuple(range(args.seeds)),
                             speed_fraction=args.speed,
                             particles=None if args.particles == "none" else args.particles,
                             load_levels=tuple(args.levels), threads=args.threads,
-                            combine=args.combine)
+                            extra=extra, combine=args.combine)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CliError(f"--out {str(out)!r} is not valid; it must be a folder")
+    save_study_plan(plan, out)  # so that `millscope report OUT` remakes the tables from the store
     runs = len(plan.cases())
-    print(f"millscope study accuracy: {len(plan.settings)} settings x {len(plan.load_levels)} "
-          f"level(s) x {len(plan.seeds)} seeds = {runs} runs, {args.workers} at a time on "
-          f"{plan.threads} engine thread(s); store {out / 'store'}", flush=True)
+    _note(args, f"millscope study accuracy: {len(plan.settings)} settings x "
+                f"{len(plan.load_levels)} level(s) x {len(plan.seeds)} seeds = {runs} runs, "
+                f"{args.workers} at a time on {plan.threads} engine thread(s); store "
+                f"{out / 'store'}")
+    sys.stdout.flush()
     result = _resumable(lambda: run_study(plan, out / "store", max_workers=args.workers,
                                           progress=not args.no_progress),
                         out / "store", "runs")
     if result is None:
         return EXIT_INTERRUPTED
-    written = write_study(result, out, quantity=args.quantity)
-    print(result.to_markdown(args.quantity))
+    written = write_study(result, out, quantity=args.quantity, cost=args.cost)
+    _print_study(args, result, args.quantity)
     for path in written:
-        print(f"wrote {path}")
+        _note(args, f"wrote {path}")
     return 0
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """One case described in a TOML file (millscope.app.case_files)."""
+    from .case_files import run_case_file
+
+    code = run_case_file(args)
+    return EXIT_INTERRUPTED if code is None else code
+
+
+def cmd_campaign(args: argparse.Namespace) -> int:
+    """A campaign described in a TOML file (millscope.app.case_files)."""
+    from .case_files import load_campaign, run_campaign
+
+    plan = load_campaign(args.file)
+    code = _resumable(lambda: run_campaign(plan, progress=not args.no_progress),
+                      plan.campaign.store, "cases")
+    return EXIT_INTERRUPTED if code is None else code
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
@@ -337,6 +466,12 @@ def torque_file_options(args: argparse.Namespace) -> dict[str, object]:
     return {k: v for k, v in given.items() if v is not None}
 
 
+def _add_cost_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--cost", default="wall_s", choices=["wall_s", "particle_steps"],
+                   help="a study's cost axis: wall-clock s per run, or particle-steps per run "
+                        "(the same on any machine and load; default wall_s)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .bench import thread_count
 
@@ -370,6 +505,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="analysis band 0..BAND_HZ, Hz (default 50, the paper's); records sampled "
                         "faster than 2.5 x BAND_HZ are decimated to that rate first")
     p.add_argument("--out", default="out", help="folder for the plots (default out)")
+    _add_format_argument(p, "the figures (one row)")
     add_torque_file_arguments(p)
     p.set_defaults(func=cmd_analyze)
 
@@ -389,22 +525,30 @@ def build_parser() -> argparse.ArgumentParser:
                    help="analysis band 0..BAND_HZ, Hz, for a calibration that does not give "
                         "one (format 1): the Nyquist frequency of its records (50 for 10 ms "
                         "samples); default: the calibration's")
+    _add_format_argument(p, "the windows (one row each)")
     add_torque_file_arguments(p)
     p.set_defaults(func=cmd_monitor)
 
-    p = sub.add_parser("report", help="report of a campaign store (Markdown + figures)",
+    p = sub.add_parser("report", help="report of a campaign store or a study (Markdown + figures)",
                        description="Analyses a campaign store (paper section 6) and writes "
                                    "report.md with the Table 6 analogue, per-group and per-case "
                                    "tables, Figs. 9-15 as PNG and a calibration per group. "
                                    "Case files it cannot read are listed in the report, and "
-                                   "it then exits with code 2 naming them.")
-    p.add_argument("store", help="campaign store directory")
-    p.add_argument("--out", default=None, help="output folder (default STORE/report)")
+                                   "it then exits with code 2 naming them. Given a study's "
+                                   "folder (the --out of 'study accuracy', holding study.json "
+                                   "and store/), it writes the study's accuracy.csv, .md and "
+                                   ".png from the finished runs instead, simulating nothing.")
+    p.add_argument("store", help="campaign store directory, or a study's folder")
+    p.add_argument("--out", default=None,
+                   help="output folder (default STORE/report; a study's own folder)")
     p.add_argument("--block", type=float, nargs=2, metavar=("T1", "T2"), default=None,
                    help="block to analyse, s (default: as the campaign analysed it)")
     p.add_argument("--bootstrap", type=_positive_int, default=1000,
                    help="bootstrap replicates (default 1000)")
+    _add_cost_argument(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_format_argument(p, "the store's cases (one row each, failed and unreadable ones "
+                            "included; the report is written as well)")
     p.set_defaults(func=cmd_report)
 
     p = sub.add_parser("demo", help="the main job: a small DEM campaign and its report in --out",
@@ -438,7 +582,29 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default 1)")
     p.add_argument("--workers", type=_positive_int, default=None,
                    help="parallel cases (default: cores / threads)")
+    _add_format_argument(p, "the cases (one row each)")
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser("run", help="run one case described in a TOML file",
+                       description="Reads a case file ([scene]: a preset such as pilot_mill "
+                                   "or an explicit scene; [settings]: seed, duration, warm-up, "
+                                   "sampling, time step, threads; [output]: the torque record "
+                                   ".npz or .csv, a checkpoint, an analysis, a spectrum figure), "
+                                   "checks all of it, then fills, settles and runs the mill "
+                                   "and writes the outputs. See examples/*.toml.")
+    p.add_argument("file", help="case file (TOML)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("campaign", help="run or resume a campaign described in a TOML file",
+                       description="Reads a campaign file ([campaign]: store, block, seeds; "
+                                   "[matrix] and/or [[scenes]]; [settings]; [executor]), checks "
+                                   "all of it, runs the cases not yet in the store (a rerun "
+                                   "resumes) and prints one line per case; failed cases end "
+                                   "with one error line and exit code 2. See examples/*.toml.")
+    p.add_argument("file", help="campaign file (TOML)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_campaign)
 
     p = sub.add_parser("advise", help="stiffness advice: contact times against dt and the "
                                       "torque sampling",
@@ -509,9 +675,15 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("--vary-scale", nargs="+", metavar="SCALE")
     group.add_argument("--combine", action="store_true",
                        help="also run the cheapest value of every ladder together")
+    group.add_argument("--also", type=_setting_changes, action="append", metavar="KNOB=V,...",
+                       help="also run the reference with several knobs changed at once, e.g. "
+                            "scale=tiny,shear=0.001 (knobs: " + ", ".join(_ALSO_KNOBS)
+                            + "); may be repeated")
     p.add_argument("--quantity", default="energy",
-                   choices=["mean_torque", "energy", "lth_amplitude", "slope_a"],
+                   choices=["mean_torque", "energy", "lth_amplitude", "slope_a",
+                            "energy_ratio"],
                    help="the error plotted and whose Pareto front is marked (default energy)")
+    _add_cost_argument(p)
     p.add_argument("--threads", type=thread_count, default=1,
                    help="engine threads per run, at most the cores this process may use "
                         "(default 1)")
@@ -519,6 +691,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="runs at a time (default 1, so that their wall times do not disturb "
                         "each other)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_format_argument(p, "the table (one row per setting and level, as accuracy.csv)")
     p.set_defaults(func=cmd_study_accuracy)
 
     from .bench import add_arguments as add_bench_arguments

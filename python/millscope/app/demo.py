@@ -29,6 +29,7 @@ from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 from tqdm.auto import tqdm
 
 from .._files import atomic_write
@@ -44,6 +45,7 @@ from ..calibration.fit import (
 )
 from ..campaign.cases import MAX_DURATION_S, CaseResult, RunSettings
 from ..campaign.runs import Campaign
+from ..campaign.tables import CaseResults
 from ..engine.simulation import _available_cores
 from ..model.presets import (
     LIFTER_COUNT,
@@ -260,7 +262,7 @@ def run_demo(out: str | os.PathLike[str], plan: DemoPlan | None = None, *,
         raise RuntimeError(f"{len(failed)} of {len(results)} cases failed, first "
                            f"{failed[0].scene.name}: {failed[0].error}; see "
                            f"{campaign.store / 'manifest.json'} (a rerun retries them)")
-    results = sorted(results, key=_level)
+    results = CaseResults(sorted(results, key=_level))
     section = main_job_section(results, folder, plan=plan, campaign_wall_s=wall)
     report = write_report(campaign.store, folder, progress=progress, sections=[section])
     calibration = folder / calibration_file_name(_group(results[0]))
@@ -323,11 +325,12 @@ def main_job_section(results: Sequence[CaseResult], out: str | os.PathLike[str],
         with fewer than 2 done cases, or two cases at one level.
     """
     folder = Path(out)
-    if len(results) < 2 or any(not r.ok or r.record is None for r in results):
+    records = [r.record for r in results if r.ok and r.record is not None]
+    if len(results) < 2 or len(records) != len(results):
         raise ValueError(f"main_job_section needs at least 2 done cases; got {len(results)} "
                          f"of which {sum(r.ok for r in results)} done")
-    rows = sorted((_Row(_level(r), r, r.record.block(*plan.block))  # type: ignore[union-attr]
-                   for r in results), key=lambda row: row.level)
+    rows = sorted((_Row(_level(r), r, record.block(*plan.block))
+                   for r, record in zip(results, records, strict=True)), key=lambda row: row.level)
     levels = np.array([row.level for row in rows], dtype=np.float64)
     if len(set(levels.tolist())) != len(rows):
         raise ValueError(f"main_job_section needs one case per level; got levels "
@@ -338,8 +341,8 @@ def main_job_section(results: Sequence[CaseResult], out: str | os.PathLike[str],
     lifters, rotation_hz = int(meta["lifters"]), float(meta["rotation_hz"])
     written: list[str] = []
 
-    def save(fig: object, name: str) -> None:
-        plots.save_figure(fig, folder / name)  # type: ignore[arg-type]
+    def save(fig: Figure, name: str) -> None:
+        plots.save_figure(fig, folder / name)
         written.append(name)
 
     k = first.level

@@ -39,7 +39,7 @@ from .. import _checks
 from .._files import MAX_JSON_BYTES, atomic_write, read_json
 from ..signal.analysis import WINDOWS, analyze_block, check_bandwidth
 from ..signal.record import TorqueRecord
-from ..signal.spectral import MAX_LIFTERS, RemoveItem, lifter_harmonic_hz
+from ..signal.spectral import MAX_LIFTERS, RemoveItem, WindowName, lifter_harmonic_hz
 from .groups import GroupAnalysis, analyze_campaign
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 
@@ -135,7 +135,7 @@ class Calibration:
     rotation_hz: float
     block_s: float
     bandwidth: float = 0.3
-    window: str = "hann"
+    window: WindowName = "hann"
     extra_lines_hz: tuple[float, ...] = ()
     label: str = ""
     meta: dict[str, Any] = field(default_factory=dict)
@@ -264,9 +264,7 @@ class Calibration:
     @classmethod
     def _from_group(cls, group: GroupAnalysis, *, stacklevel: int) -> Calibration:
         g = group
-        if g.fit is None:
-            raise ValueError(f"group {g.name} has a single load level ({g.levels[0]:g}); a "
-                             "calibration needs at least 2")
+        fit = g.log_fit  # ValueError for a group with a single load level
         nyquist = {0.5 * r.record.sample_rate_hz for r in g.results if r.record is not None}
         band = min(nyquist) if nyquist else None
         meta = {
@@ -280,13 +278,13 @@ class Calibration:
             "interval_source": list(g.interval_source),
             "cases": [r.hash for r in g.results],
         }
-        calibration = cls(fit=g.fit, reference_energy=float(g.energy.max()), lifters=g.lifters,
+        calibration = cls(fit=fit, reference_energy=float(g.energy.max()), lifters=g.lifters,
                           rotation_hz=g.rotation_hz, block_s=g.settings.block_s,
                           bandwidth=g.settings.bandwidth, window=g.settings.window,
                           label=g.name, meta=meta, band_hz=band,
                           block_relative_std=g.block_relative_std())
         if not calibration.gives_intervals:
-            warnings.warn(f"calibration of group {g.name}: {no_interval_reason(g.fit)}; its "
+            warnings.warn(f"calibration of group {g.name}: {no_interval_reason(fit)}; its "
                           "estimates will have no interval (nan)", NoIntervalWarning,
                           stacklevel=stacklevel)
         return calibration
@@ -495,7 +493,7 @@ def estimate_fill(record: TorqueRecord, calibration: Calibration, *,
                          f"{nyquist:g} Hz; it needs at least {2 * cal.band_hz:g} Hz")
     analysis = analyze_block(record, lifters=cal.lifters, rotation_hz=cal.rotation_hz,
                              lines_hz=[*cal.extra_lines_hz, *lines_hz],
-                             window=cal.window,  # type: ignore[arg-type]  # checked at run time
+                             window=cal.window,
                              bandwidth=cal.bandwidth,
                              band_hz=None if cal.band_hz is None else (0.0, cal.band_hz))
     e = analysis.energy

@@ -41,7 +41,7 @@ IntervalSource = Literal["seeds", "blocks", "none"]
 
 def _frozen(values: Iterable[float] | NDArray[Any], dtype: type = np.float64) -> NDArray[Any]:
     """A read-only copy (the analysis is frozen)."""
-    array = np.array(values, dtype=dtype)
+    array: NDArray[Any] = np.array(values, dtype=dtype)
     array.flags.writeable = False
     return array
 
@@ -87,7 +87,7 @@ class GroupAnalysis:
         Bootstrap interval (low, high) of ``energy_pu``.
     fit : LogFit or None
         y = a ln(x) + b fitted to ``energy_pu`` against ``levels`` (Table 6; None with one
-        level).
+        level). :attr:`log_fit` is the same fit, typed ``LogFit``: it raises when there is none.
     a_interval, b_interval : (float, float)
         Bootstrap intervals of a and b (nan when no interval is available).
     interval_source : tuple of str
@@ -128,6 +128,15 @@ class GroupAnalysis:
     bootstrap: int
     settings: AnalysisSettings
     results: tuple[CaseResult, ...] = field(repr=False)
+
+    @property
+    def log_fit(self) -> LogFit:
+        """The group's log fit (:attr:`fit`); ValueError when the group has a single load level,
+        so no fit."""
+        if self.fit is None:
+            raise ValueError(f"group {self.name} has a single load level ({self.levels[0]:g}); "
+                             "a fit needs at least 2")
+        return self.fit
 
     @property
     def has_intervals(self) -> bool:
@@ -267,7 +276,7 @@ def _level_spread(repeats: list[CaseResult], settings: AnalysisSettings, sub_blo
     assert case.record is not None
     parts = sub_block_energies(case.record.block(*settings.block), lth_hz=case.lth_hz,
                                sub_blocks=sub_blocks, bandwidth=settings.bandwidth,
-                               window=settings.window)  # type: ignore[arg-type]
+                               window=settings.window)
     if parts is None or not np.all(parts > 0):
         return "none", None, math.nan
     spread = _sub_block_spread(parts)
@@ -287,7 +296,7 @@ def _replicate_factors(spreads: list[tuple[IntervalSource, NDArray[np.float64] |
     repeats draw from the pooled relative deviations of all such levels, a level with one case
     resamples its sub-blocks, its deviations scaled up to the level's spread when the block's
     spectrum says it scatters more (:func:`_level_spread`)."""
-    seeds = [values for source, values, _ in spreads if source == "seeds"]
+    seeds = [values for source, values, _ in spreads if source == "seeds" and values is not None]
     pool = np.concatenate([log_residuals(v) for v in seeds]) if seeds else None
     columns = []
     for source, values, spread in spreads:
@@ -338,8 +347,9 @@ def _analyze_group(name: str, particles: str, speed_fraction: float | None,
         pu_interval = np.vstack(percentile_interval(replicates, confidence))
         if fit is not None:
             a_star, b_star = log_fit_coefficients(levels, replicates)
-            a_interval = tuple(float(v) for v in percentile_interval(a_star, confidence))
-            b_interval = tuple(float(v) for v in percentile_interval(b_star, confidence))
+            a_lo, a_hi = percentile_interval(a_star, confidence)
+            b_lo, b_hi = percentile_interval(b_star, confidence)
+            a_interval, b_interval = (float(a_lo), float(a_hi)), (float(b_lo), float(b_hi))
     return GroupAnalysis(
         name=name, particles=particles, speed_fraction=speed_fraction,
         rotation_hz=float(rotation_hz), lifters=int(lifters), levels=_frozen(levels),
@@ -348,7 +358,7 @@ def _analyze_group(name: str, particles: str, speed_fraction: float | None,
         lth_hz=level_means("lth_hz"), lth_amplitude=level_means("lth_amplitude"),
         energy=energy, energy_relative_std=_frozen([s for _, _, s in spreads]),
         energy_pu=_frozen(energy_pu), energy_pu_interval=_frozen(pu_interval), fit=fit,
-        a_interval=a_interval, b_interval=b_interval,  # type: ignore[arg-type]
+        a_interval=a_interval, b_interval=b_interval,
         interval_source=sources, confidence=confidence, bootstrap=bootstrap,
         settings=settings, results=tuple(r for _, r in members))
 

@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import stats
 
 __all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit"]
 
@@ -72,6 +71,10 @@ class LogFit:
         """
         if self.n < 3 or not np.isfinite(self.residual_std):
             return math.nan
+        # scipy.stats takes most of a second to import: loaded here, on first use, so that
+        # `import millscope` stays quick
+        from scipy import stats
+
         t = stats.t.ppf(0.5 + confidence / 2, self.n - 2)
         u = math.log(x)
         mean_var = self.residual_std**2 * (1 / self.n + (u - self.ln_x_mean) ** 2 / self.ln_x_sxx)
@@ -181,4 +184,5 @@ def per_unit(energies: ArrayLike) -> NDArray[np.float64]:
     if (e.size == 0 or e.ndim > 2 or not np.all(np.isfinite(e))
             or np.any(e.max(axis=-1) <= 0)):
         raise ValueError(f"energies must be finite with a positive maximum; got {e.tolist()}")
-    return e / e.max(axis=-1, keepdims=True)
+    pu: NDArray[np.float64] = e / e.max(axis=-1, keepdims=True)
+    return pu

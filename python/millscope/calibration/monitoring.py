@@ -25,7 +25,9 @@ import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
+from .._frames import Kind, frame
 from ..signal.drivetrain import DriveTrain, decimate_record
 from ..signal.record import TorqueRecord
 from .fit import (
@@ -35,6 +37,9 @@ from .fit import (
     estimate_fill,
     no_interval_reason,
 )
+
+if TYPE_CHECKING:
+    from pandas import DataFrame
 
 __all__ = ["MissingBandWarning", "MonitorResult", "WindowEstimate", "monitor", "monitor_record"]
 
@@ -86,6 +91,8 @@ class MonitorResult:
         The record's own rate when it was decimated, Hz.
     lines_hz : tuple of float
         Drive-train lines removed besides the mean and the LTH, Hz.
+    confidence : float
+        Of the windows' intervals.
     """
 
     windows: list[WindowEstimate]
@@ -94,6 +101,32 @@ class MonitorResult:
     sample_rate_hz: float
     decimated_from_hz: float | None
     lines_hz: tuple[float, ...]
+    confidence: float = 0.95
+
+    def to_frame(self) -> DataFrame:
+        """The windows as a pandas DataFrame, one row per window in time order.
+
+        Columns: ``start_s``, ``end_s`` (the window ``start_s <= t < end_s``, s, record
+        time), ``level`` (the estimated load level, Table 5 units), ``level_low``,
+        ``level_high`` (its interval at :attr:`confidence`; nan when the calibration gives
+        none), ``energy_pu`` (the window's spectral energy per unit of the calibration's
+        reference, dimensionless): float64; ``outside`` (the level lies outside the
+        calibrated range): bool. ``attrs`` holds ``window_s``, ``step_s`` (s),
+        ``sample_rate_hz`` (Hz) and ``confidence``.
+        """
+        table = frame(_WINDOW_COLUMNS, [
+            {"start_s": w.start_s, "end_s": w.end_s, "level": w.level,
+             "level_low": w.interval[0], "level_high": w.interval[1],
+             "energy_pu": w.energy_pu, "outside": w.outside} for w in self.windows])
+        table.attrs.update(window_s=self.window_s, step_s=self.step_s,
+                           sample_rate_hz=self.sample_rate_hz, confidence=self.confidence)
+        return table
+
+
+#: The columns of :meth:`MonitorResult.to_frame` with how each is stored.
+_WINDOW_COLUMNS: dict[str, Kind] = {
+    "start_s": "float", "end_s": "float", "level": "float", "level_low": "float",
+    "level_high": "float", "energy_pu": "float", "outside": "bool"}
 
 
 def _length(name: str, value: float, dt: float, longest: float) -> int:
@@ -233,7 +266,7 @@ def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s:
     return MonitorResult(windows=windows, window_s=width * dt, step_s=step * dt,
                          sample_rate_hz=analysed.sample_rate_hz,
                          decimated_from_hz=None if analysed is record else record.sample_rate_hz,
-                         lines_hz=lines)
+                         lines_hz=lines, confidence=float(confidence))
 
 
 def monitor(record: TorqueRecord, calibration: Calibration, *, window_s: float | None = None,

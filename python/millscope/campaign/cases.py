@@ -13,9 +13,10 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from numbers import Integral
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 from .. import _checks
+from ..engine.simulation import Sampling
 from ..model.presets import CaseKey, case_key, paper_cases
 from ..model.scene import Scene
 from ..model.stiffness import time_step_limit
@@ -34,7 +35,7 @@ __all__ = [
 ]
 
 CASE_FORMAT = "millscope-case-1"  # part of every case hash: bump it when results change meaning
-SAMPLINGS = ("instant", "mean")
+SAMPLINGS: tuple[Sampling, ...] = get_args(Sampling)
 _MIN_BLOCK_SAMPLES = 4  # the spectral analysis needs at least this many
 Status = Literal["done", "failed", "pending"]
 
@@ -82,7 +83,7 @@ class RunSettings:
     duration_s: float = 14.0
     warm_up_s: float = 0.0
     sample_dt: float = 0.01
-    sampling: str = "instant"
+    sampling: Sampling = "instant"
     threads: int = 1
     dt: float | None = None
     settle_tolerance: float = 1e-4
@@ -186,7 +187,7 @@ class Case:
                 "settings": dataclasses.asdict(self.settings)}
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Case:
+    def from_dict(cls, data: object) -> Case:
         """The case of a :meth:`to_dict` dict, validated (ValueError when damaged)."""
         if not isinstance(data, Mapping) or data.get("format") != CASE_FORMAT:
             found = data.get("format") if isinstance(data, Mapping) else type(data).__name__
@@ -198,7 +199,7 @@ class Case:
         unknown = sorted(set(settings) - known)
         if unknown:
             raise ValueError(f"case settings have unknown keys {unknown}; known: {sorted(known)}")
-        return cls(Scene.from_dict(data.get("scene")), RunSettings(**settings))  # type: ignore[arg-type]
+        return cls(Scene.from_dict(data.get("scene")), RunSettings(**settings))
 
     def canonical_json(self) -> str:
         """The JSON the hash is taken of: sorted keys, no spaces, floats as Python repr."""
@@ -308,6 +309,9 @@ class CaseResult:
     lth_hz, lth_amplitude : float
         The lifter torque harmonic located near lifters x rotation frequency in the block, Hz
         and N m (nan without lifters).
+    lth_noise : float
+        The median amplitude of the bins around it, N m (:attr:`millscope.Peak.noise_amplitude`;
+        nan without lifters).
     lth_snr : float
         Its amplitude over the median amplitude of the bins around it (nan without lifters).
     lth_distinct : bool
@@ -333,6 +337,7 @@ class CaseResult:
     lth_hz: float = math.nan
     lth_amplitude: float = math.nan
     lth_snr: float = math.nan
+    lth_noise: float = math.nan
     lth_distinct: bool = False
     energy: float = math.nan
     energy_relative_std: float = math.nan
@@ -360,6 +365,7 @@ class CaseResult:
             values: dict[str, Any] = {
                 "mean_torque": a.mean_torque_Nm, "lth_hz": a.lth.frequency_hz,
                 "lth_amplitude": a.lth.amplitude, "lth_snr": a.lth.snr,
+                "lth_noise": a.lth.noise_amplitude,
                 "lth_distinct": a.lth.distinct, "energy": a.energy.energy,
                 "energy_relative_std": a.energy.relative_std}
         else:

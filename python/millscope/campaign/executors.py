@@ -22,9 +22,10 @@ from collections.abc import Callable, Iterator, Mapping
 from typing import Any
 
 from ..engine.simulation import Simulation
+from ..signal.record import TorqueRecord
 from .cases import Case
 
-__all__ = ["run_case"]
+__all__ = ["run_case", "simulate_case"]
 
 _TRACEBACK_FRAMES = 12  # frames kept in a failed case's traceback summary (the innermost)
 _TRACEBACK_CHARS = 8000
@@ -91,6 +92,37 @@ def _traceback_summary(exc: BaseException) -> str:
     return text if len(text) <= _TRACEBACK_CHARS else "...\n" + text[-_TRACEBACK_CHARS:]
 
 
+def simulate_case(case: Case, *, track_energy: bool = False,
+                  progress: bool = False) -> tuple[Simulation, TorqueRecord]:
+    """Runs one case where it is called: its Simulation, filled, settled and run for the
+    whole ``duration_s`` (warm-up included).
+
+    Parameters
+    ----------
+    case : Case
+    track_energy : bool
+        Book the dissipated energy (:class:`~millscope.simulation.Simulation`).
+    progress : bool
+        Show the simulation's progress bars.
+
+    Returns
+    -------
+    (Simulation, TorqueRecord)
+        The simulation after the run (for its energies or a checkpoint) and the record of
+        every sample since the start of rotation; the warm-up is
+        ``case.settings.warm_up_samples`` samples long. Interrupted with Ctrl-C, the record
+        is shorter and its ``meta["interrupted"]`` is true.
+    """
+    s = case.settings
+    sim = Simulation(case.scene, seed=s.seed, dt=s.dt, threads=s.threads,
+                     settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
+                     settle_max_s=s.settle_max_s, track_energy=track_energy)
+    rec = sim.run(s.total_samples * s.sample_dt, sample_dt=s.sample_dt,
+                  sampling=s.sampling,
+                  progress=progress)
+    return sim, rec
+
+
 def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
     """Runs one case where it is called (a worker); never raises for a failing case.
 
@@ -115,12 +147,7 @@ def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
         s = c.settings
         # A case keeps the torque alone: the energy ledger would cost a quarter of the run
         # and change nothing in it (Simulation, track_energy).
-        sim = Simulation(c.scene, seed=s.seed, dt=s.dt, threads=s.threads,
-                         settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
-                         settle_max_s=s.settle_max_s, track_energy=False)
-        rec = sim.run(s.total_samples * s.sample_dt, sample_dt=s.sample_dt,
-                      sampling=s.sampling,  # type: ignore[arg-type]  # checked by RunSettings
-                      progress=False)
+        sim, rec = simulate_case(c)
         if rec.meta.get("interrupted") or len(rec) != s.total_samples:
             raise RuntimeError(f"the run was interrupted after {len(rec)} of "
                                f"{s.total_samples} samples")

@@ -46,14 +46,16 @@ import math
 import os
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .. import _checks, _core
 from .._files import atomic_write
+from .._frames import frame
 from ..engine.simulation import _available_cores
 from ..model.scene import Scene
-from ..signal.analysis import AnalysisSettings
+from ..signal.analysis import WINDOWS, AnalysisSettings
 from ..signal.record import TorqueRecord
+from ..signal.spectral import WindowName
 from .cases import _MIN_BLOCK_SAMPLES, CASE_FORMAT, Case, CaseResult, RunSettings, _seeds
 from .executors import (
     _completed,
@@ -79,8 +81,12 @@ from .store import (
     read_manifest,
     unreadable_cases,
 )
+from .tables import CASE_COLUMNS, CaseResults, case_row, unlisted_rows
 
-__all__ = ["Campaign"]
+if TYPE_CHECKING:
+    from pandas import DataFrame
+
+__all__ = ["Campaign", "read_store"]
 
 
 class Campaign:
@@ -124,7 +130,7 @@ class Campaign:
                  block: tuple[float, float] | None = (4.0, 14.0),
                  seeds: int | Iterable[int] | None = None,
                  settings: RunSettings | None = None, bandwidth: float = 0.3,
-                 window: str = "hann") -> None:
+                 window: WindowName = "hann") -> None:
         if settings is not None and not isinstance(settings, RunSettings):
             raise _checks.fail("settings", settings, "a RunSettings or None")
         base = settings or RunSettings()
@@ -158,7 +164,7 @@ class Campaign:
             raise _checks.fail("store", str(store), "a directory (or a path to create one)")
         self._store = path
         self._bandwidth = _checks.positive("bandwidth", bandwidth, "Hz")
-        self._window = _checks.choice("window", window, ("hann", "hann_periodic", "rectangular"))
+        self._window = _checks.choice("window", window, WINDOWS)
         self._block = None if block is None else self._check_block(block)
         self._analysis = (None if self._block is None
                           else AnalysisSettings(self._block, self._bandwidth, self._window))
@@ -166,7 +172,7 @@ class Campaign:
     @classmethod
     def from_store(cls, store: str | os.PathLike[str], *,
                    block: tuple[float, float] | None = None, bandwidth: float | None = None,
-                   window: str | None = None) -> Campaign:
+                   window: WindowName | None = None) -> Campaign:
         """The campaign of the cases a store holds, to read their results without the scenes.
 
         Every case with a file in the store (finished or failed) is taken, in the manifest's
@@ -214,7 +220,7 @@ class Campaign:
         digests = sorted(stored, key=lambda d: (rank.get(d, len(rank)), d))
         cases = [Case.from_dict(stored[d][2]["case"]) for d in digests]
         if block is None and saved is not None:
-            block = tuple(saved["block"])  # type: ignore[assignment]
+            block = tuple(saved["block"])
         defaults = saved or {"bandwidth": 0.3, "window": "hann"}
         return cls(cases, path, block=block,
                    bandwidth=defaults["bandwidth"] if bandwidth is None else bandwidth,
@@ -285,7 +291,7 @@ class Campaign:
 
     # -- running -------------------------------------------------------------------------------
     def run(self, executor: Any = None, *, max_workers: int | None = None,
-            progress: bool = True, retry_failed: bool = True) -> list[CaseResult]:
+            progress: bool = True, retry_failed: bool = True) -> CaseResults:
         """Runs every case not yet finished in the store, then returns all results.
 
         Parameters
@@ -309,8 +315,9 @@ class Campaign:
 
         Returns
         -------
-        list of CaseResult
-            One per case, in order (:meth:`results`).
+        CaseResults
+            One CaseResult per case, in order (:meth:`results`): a list, and its table
+            (``.to_frame()``).
 
         Raises
         ------
@@ -440,17 +447,18 @@ class Campaign:
         return _entry(info, "failed", failure, self._store)
 
     # -- results -------------------------------------------------------------------------------
-    def results(self) -> list[CaseResult]:
+    def results(self) -> CaseResults:
         """Every case as the store holds it now (nothing runs), analysed over the block.
 
         Returns
         -------
-        list of CaseResult
-            In the order of :attr:`cases`; "pending" for cases never run, and for cases whose
+        CaseResults
+            A list of CaseResult, in the order of :attr:`cases`, with its table
+            (:meth:`CaseResults.to_frame`); "pending" for cases never run, and for cases whose
             file cannot be read (:func:`unreadable_cases`): their ``error`` says why, and the
             next :meth:`run` computes them again.
         """
-        out = []
+        out = CaseResults()
         for case, digest in zip(self._cases, self._hashes, strict=True):
             problems = []
             path = _case_path(self._store, digest)
@@ -480,6 +488,42 @@ class Campaign:
                                   error=("unreadable case file " + "; ".join(problems)
                                          if problems else None)))
         return out
+
+
+def read_store(store: str | os.PathLike[str], *, block: tuple[float, float] | None = None,
+               bandwidth: float | None = None, window: WindowName | None = None) -> DataFrame:
+    """Every case a campaign store holds as one table (a pandas DataFrame), nothing run.
+
+    The rows of :meth:`CaseResults.to_frame` for the store's cases
+    (:meth:`Campaign.from_store`: finished and failed, analysed as the store's campaign
+    analysed them unless ``block``, ``bandwidth`` or ``window`` say otherwise), then one row
+    per case the store names but cannot give: a damaged case file (``status``
+    ``"unreadable"``, ``error`` naming the file and why) and a case its manifest lists
+    without a file (``"pending"``); their scene and seed are the manifest's, or missing.
+
+    Parameters
+    ----------
+    store : str or path
+        A campaign store directory.
+    block, bandwidth, window
+        As :meth:`Campaign.from_store`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns :data:`~millscope.campaign.tables.CASE_COLUMNS`
+        (:meth:`CaseResults.to_frame` says what each holds, in which unit and type).
+
+    Raises
+    ------
+    ValueError
+        as :meth:`Campaign.from_store`: no such directory, no readable case file, a damaged
+        manifest, or a block that does not fit.
+    """
+    campaign = Campaign.from_store(store, block=block, bandwidth=bandwidth, window=window)
+    rows = [case_row(r) for r in campaign.results()]
+    rows += unlisted_rows(campaign.store, set(campaign.hashes))
+    return frame(CASE_COLUMNS, rows)
 
 
 def _number(value: object) -> float:

@@ -52,7 +52,7 @@ def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
         info = record.meta.get("campaign")
         if not isinstance(info, dict):
             raise _Unreadable('its meta holds no "campaign" mapping')
-        case = Case.from_dict(info.get("case"))  # type: ignore[arg-type]
+        case = Case.from_dict(info.get("case"))
     except _Unreadable:
         raise
     except RecordError as exc:  # its message starts with the path, which the caller names
@@ -79,7 +79,7 @@ def _open_failed(path: Path) -> dict[str, Any]:
             raise _Unreadable(str(exc).removeprefix(f"{path}: ")) from None
         if not isinstance(info, dict):
             raise _Unreadable(f"holds a JSON {type(info).__name__}, not a failed case")
-        digest = Case.from_dict(info.get("case")).hash()  # type: ignore[arg-type]
+        digest = Case.from_dict(info.get("case")).hash()
     except _Unreadable:
         raise
     except (OSError, KeyError, TypeError, ValueError, RecursionError) as exc:
@@ -114,11 +114,12 @@ def _case_files(store: Path) -> Iterator[tuple[Status, Path]]:
     """Every case file in ``store/cases`` (not the temporaries of unfinished writes):
     failures first, so that a finished case's file wins over a failure of the same case."""
     folder = store / "cases"
+    patterns: tuple[tuple[Status, str], ...] = (("failed", "*.failed.json"), ("done", "*.npz"))
     if folder.is_dir():
-        for status, pattern in (("failed", "*.failed.json"), ("done", "*.npz")):
+        for status, pattern in patterns:
             for path in sorted(folder.glob(pattern)):
                 if not path.name.startswith("."):
-                    yield status, path  # type: ignore[misc]
+                    yield status, path
 
 
 def _stored(store: Path) -> dict[str, tuple[Status, Path, dict[str, Any]]]:

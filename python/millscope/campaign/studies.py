@@ -50,10 +50,13 @@ seed mean.
 
 from __future__ import annotations
 
+import json
 import os
+from pathlib import Path
 from typing import Any
 
 from .. import _checks
+from .._files import MAX_JSON_BYTES, atomic_write, read_json
 from ..signal.analysis import AnalysisSettings
 from .cases import CaseResult
 from .runs import Campaign
@@ -70,17 +73,33 @@ __all__ = [
     "StudyResult",
     "StudyRow",
     "StudyRun",
+    "PLAN_FILE",
+    "read_study",
+    "read_study_plan",
     "run_study",
+    "save_study_plan",
 ]
+
+#: The file in a study's folder that holds its plan (:func:`save_study_plan`); the runs are in
+#: the campaign store ``<folder>/store``.
+PLAN_FILE = "study.json"
+_PLAN_FORMAT = "millscope-study-1"
 
 
 # -- running -----------------------------------------------------------------------------------
 
 
-def _run_of(plan: StudyPlan, k: int, level: int, seed: int, result: CaseResult) -> StudyRun:
-    """A finished case analysed as the campaign does, with what it cost."""
+def _run_of(plan: StudyPlan, index: int, result: CaseResult) -> StudyRun:
+    """Case ``index`` of the plan analysed as the campaign does, with what it cost.
+
+    ``result`` is that case's, or its donor's (:meth:`StudyPlan.donor`): a run of the same
+    scene, seed, time step, sampling and warm-up with a longer block, whose record begins with
+    exactly the samples the shorter run would take. The shorter block is then cut from it, its
+    particle-steps counted for its own length and its wall time estimated as the donor's in
+    proportion to particle-steps.
+    """
+    k, level, seed, case = plan._cases[index]
     setting = plan.settings[k]
-    case = result.case
     analysis = AnalysisSettings((setting.warm_up_s, setting.duration_s), plan.bandwidth,
                                 plan.window)
     assert result.record is not None  # done cases have a record
@@ -91,14 +110,16 @@ def _run_of(plan: StudyPlan, k: int, level: int, seed: int, result: CaseResult) 
     # the record: energies are compared per the block length actually analysed.
     block_s = result.record.block(*analysis.block).duration_s
     dt = result.record.meta["dt"]
-    settle = result.record.meta.get("settle") or {}
-    steps = round(float(settle.get("time_s", 0.0)) / dt) + round(case.settings.duration_s / dt)
+    settle = round(float((result.record.meta.get("settle") or {}).get("time_s", 0.0)) / dt)
+    steps = settle + round(case.settings.duration_s / dt)
+    ran = settle + round(result.case.settings.duration_s / dt)
     n = case.scene.n_particles
     return StudyRun(setting=k, load_level=level, seed=seed, hash=result.hash,
-                    wall_s=float(result.wall_time_s), particle_steps=float(n * steps),
-                    n_particles=n, dt_s=float(dt), length_m=case.scene.drum.length,
-                    block_s=block_s, mean_torque=analysed.mean_torque,
-                    lth_amplitude=analysed.lth_amplitude, energy=analysed.energy)
+                    wall_s=float(result.wall_time_s) * steps / ran,
+                    particle_steps=float(n * steps), n_particles=n, dt_s=float(dt),
+                    length_m=case.scene.drum.length, block_s=block_s,
+                    mean_torque=analysed.mean_torque, lth_amplitude=analysed.lth_amplitude,
+                    energy=analysed.energy, derived=result.case != case)
 
 
 def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any = None,
@@ -137,7 +158,7 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
     """
     if not isinstance(plan, StudyPlan):
         raise _checks.fail("plan", plan, "a StudyPlan")
-    order = sorted(range(len(plan.cases())),
+    order = sorted((i for i in range(len(plan.cases())) if plan.donor(i) is None),
                    key=lambda i: -plan.planned_particle_steps(plan.settings[plan._cases[i][0]]))
     campaign = Campaign([plan._cases[i][3] for i in order], store, block=None)
     if executor is None and max_workers is None:
@@ -148,7 +169,82 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
         raise RuntimeError(f"{len(failed)} of {len(results)} runs failed, first "
                            f"{failed[0].case.name}: {failed[0].error}; see "
                            f"{campaign.store / 'manifest.json'} (a rerun retries them)")
-    by_hash = {r.hash: r for r in results}
-    runs = [_run_of(plan, k, level, seed, by_hash[case.hash()])
-            for k, level, seed, case in plan._cases]
-    return StudyResult.from_runs(plan, runs, store=campaign.store)
+    return _tabulate(plan, campaign.store, results, partial=False)
+
+
+def _tabulate(plan: StudyPlan, store: Path, results: list[CaseResult], *,
+              partial: bool) -> StudyResult:
+    """The table of the finished ones of a plan's cases (``results`` of any order); a case
+    with a donor (:meth:`StudyPlan.donor`) is cut from the donor's record."""
+    by_hash = {r.hash: r for r in results if r.ok}
+    cases = plan.cases()
+    runs = []
+    for i in range(len(cases)):
+        donor = plan.donor(i)
+        source = cases[i if donor is None else donor].hash()
+        if source in by_hash:
+            runs.append(_run_of(plan, i, by_hash[source]))
+    return StudyResult.from_runs(plan, runs, store=store, partial=partial)
+
+
+def save_study_plan(plan: StudyPlan, folder: str | os.PathLike[str]) -> Path:
+    """Writes the plan into ``<folder>/study.json`` (atomically), so that the study's report
+    can be made again from its store (:func:`read_study`) without the command that ran it.
+
+    Returns
+    -------
+    Path
+    """
+    if not isinstance(plan, StudyPlan):
+        raise _checks.fail("plan", plan, "a StudyPlan")
+    path = Path(folder) / PLAN_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path, "w") as fh:
+        json.dump({"format": _PLAN_FORMAT, "plan": plan.to_dict()}, fh, indent=1)
+        fh.write("\n")
+    return path
+
+
+def read_study_plan(folder: str | os.PathLike[str]) -> StudyPlan:
+    """The plan :func:`save_study_plan` wrote into ``folder`` (an untrusted file: checked).
+
+    Raises
+    ------
+    ValueError
+        naming the file, when it is missing, not a study plan or out of range.
+    """
+    path = Path(folder) / PLAN_FILE
+    data = read_json(path, "study plan", max_bytes=MAX_JSON_BYTES)
+    if not isinstance(data, dict) or data.get("format") != _PLAN_FORMAT or "plan" not in data:
+        raise ValueError(f"{path} is not a millscope study plan (format {_PLAN_FORMAT!r})")
+    return StudyPlan.from_dict(data["plan"], where=str(path))
+
+
+def read_study(folder: str | os.PathLike[str]) -> StudyResult:
+    """The table of a study from what its folder holds, without running anything.
+
+    Reads the plan (``<folder>/study.json``) and the finished runs of its campaign store
+    (``<folder>/store``) and tabulates every setting whose runs are all finished; the others
+    are listed in :attr:`StudyResult.pending` (a study still under way, or stopped).
+
+    Parameters
+    ----------
+    folder : path
+        The study's folder (the ``--out`` of ``millscope study accuracy``).
+
+    Returns
+    -------
+    StudyResult
+
+    Raises
+    ------
+    ValueError
+        when the plan cannot be read, or the reference's runs are not all finished.
+    """
+    plan = read_study_plan(folder)
+    store = Path(folder) / "store"
+    if not store.is_dir():
+        raise ValueError(f"{store} is not valid; the study's campaign store must be a folder")
+    ran = [c for i, c in enumerate(plan.cases()) if plan.donor(i) is None]
+    results = Campaign(ran, store, block=None).results()
+    return _tabulate(plan, store, results, partial=True)

@@ -15,21 +15,28 @@ from typing import Any
 import numpy as np
 
 from .. import _checks
+from ..engine.simulation import Sampling
 from ..model.contact import MAX_DT_FRACTION
 from ..model.presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
 from ..model.scene import Scene
 from ..signal.analysis import WINDOWS
-from ..signal.spectral import LTH_CLEAR_BINS, lifter_harmonic_hz
+from ..signal.spectral import LTH_CLEAR_BINS, WindowName, lifter_harmonic_hz
 from .cases import MAX_DURATION_S, SAMPLINGS, Case, RunSettings
 
-__all__ = ["COSTS", "KNOBS", "QUANTITIES", "Setting", "StudyPlan"]
+__all__ = ["COSTS", "KNOBS", "LEVEL_QUANTITIES", "QUANTITIES", "Setting", "StudyPlan"]
 
 #: The knobs a :class:`Setting` turns, in the order tables show them.
 KNOBS: tuple[str, ...] = ("dt_fraction", "shear_modulus_factor", "record_s", "warm_up_s",
                           "sampling", "scale")
 #: The quantities a study compares, with the unit of their values.
+#: ``energy_ratio`` is the per-unit energy of the last load level, E(last) / E(first) of the
+#: same seed (e.g. LDMS #4 / LDMS #1), the quantity the fill estimate reads; like ``slope_a``
+#: it needs 2 or more load levels.
 QUANTITIES: Mapping[str, str] = MappingProxyType({"mean_torque": "N m", "energy": "(N m)^2 s",
-                                                   "lth_amplitude": "N m", "slope_a": ""})
+                                                   "lth_amplitude": "N m", "slope_a": "",
+                                                   "energy_ratio": ""})
+#: The quantities that compare load levels (nan with one level).
+LEVEL_QUANTITIES: tuple[str, ...] = ("slope_a", "energy_ratio")
 #: What a setting's cost is measured in: wall-clock s or particle-steps, per run.
 COSTS = ("wall_s", "particle_steps")
 
@@ -70,7 +77,7 @@ class Setting:
     shear_modulus_factor: float | None = None
     record_s: float = 4.0
     warm_up_s: float = 2.0
-    sampling: str = "instant"
+    sampling: Sampling = "instant"
     scale: str = "tiny"
 
     def __post_init__(self) -> None:
@@ -190,9 +197,10 @@ class StudyPlan:
     sample_dt: float = 0.01
     threads: int = 1
     bandwidth: float = 0.3
-    window: str = "hann"
+    window: WindowName = "hann"
     _cases: tuple[tuple[int, int, int, Case], ...] = field(init=False, repr=False,
                                                            compare=False)
+    _donors: tuple[int | None, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         settings = self.settings
@@ -237,7 +245,7 @@ class StudyPlan:
             "load_levels": levels,
             "sample_dt": _checks.positive("StudyPlan.sample_dt", self.sample_dt, "s"),
             "bandwidth": _checks.positive("StudyPlan.bandwidth", self.bandwidth, "Hz"),
-            "window": _checks.choice("StudyPlan.window", self.window, tuple(WINDOWS)),
+            "window": _checks.choice("StudyPlan.window", self.window, WINDOWS),
         }
         if (not isinstance(self.threads, Integral) or isinstance(self.threads, bool)
                 or self.threads < 1):
@@ -248,6 +256,7 @@ class StudyPlan:
         self._check_blocks()
         cases = self._build_cases()
         object.__setattr__(self, "_cases", cases)
+        object.__setattr__(self, "_donors", self._find_donors())
         object.__setattr__(self, "reference", self._choose_reference())
 
     def _check_blocks(self) -> None:
@@ -332,6 +341,41 @@ class StudyPlan:
                     owner[digest] = k
                     out.append((k, level, seed, case))
         return tuple(out)
+
+    def _find_donors(self) -> tuple[int | None, ...]:
+        """For each case, the case with the longest block whose record holds its block."""
+        out: list[int | None] = []
+        for k, level, seed, _ in self._cases:
+            own = self.settings[k]
+            longer = [(self.settings[k2].record_s, j)
+                      for j, (k2, level2, seed2, _) in enumerate(self._cases)
+                      if (level2, seed2) == (level, seed)
+                      and self.settings[k2].record_s > own.record_s
+                      and self.settings[k2] == own.replace(record_s=self.settings[k2].record_s)]
+            out.append(max(longer)[1] if longer else None)
+        return tuple(out)
+
+    def donor(self, index: int) -> int | None:
+        """The case whose record holds case ``index``'s block, or None.
+
+        A setting that differs from another only by a shorter block (``record_s``) runs
+        nothing: the engine is deterministic and samples a run the same whether it goes on
+        or stops, so the first ``warm_up_s + record_s`` s of the longer run (same scene,
+        seed, time step, sampling and warm-up) are exactly the shorter run. Its block is cut
+        from the longest such run (``millscope.campaign.studies``).
+
+        Parameters
+        ----------
+        index : int
+            Index into :meth:`cases`.
+
+        Returns
+        -------
+        int or None
+            Index into :meth:`cases` of the donor (never itself derived), or None when the
+            case runs.
+        """
+        return self._donors[index]
 
     def _choose_reference(self) -> Setting:
         ref = self.reference
@@ -460,12 +504,52 @@ class StudyPlan:
         return cls((*plan.settings, together), reference=reference, **fields)
 
     def to_dict(self) -> dict[str, Any]:
-        """The plan as plain data."""
+        """The plan as plain data (JSON-ready; :meth:`from_dict` reads it back)."""
         return {"settings": [s.to_dict() for s in self.settings],
                 "reference": self.reference_index, "seeds": list(self.seeds),
                 "speed_fraction": self.speed_fraction, "particles": self.particles,
                 "load_levels": list(self.load_levels), "sample_dt": self.sample_dt,
                 "threads": self.threads, "bandwidth": self.bandwidth, "window": self.window}
+
+    @classmethod
+    def from_dict(cls, data: object, where: str = "study plan") -> StudyPlan:
+        """The plan :meth:`to_dict` wrote, validated as on construction.
+
+        Parameters
+        ----------
+        data : mapping
+            As :meth:`to_dict` returns it (read from an untrusted file: every field is
+            checked).
+        where : str
+            Where the data came from, for error messages (e.g. a file name).
+
+        Raises
+        ------
+        ValueError
+            naming ``where`` and the field, for anything missing or out of range.
+        """
+        fields = ("settings", "reference", "seeds", "speed_fraction", "particles",
+                  "load_levels", "sample_dt", "threads", "bandwidth", "window")
+        if not isinstance(data, Mapping) or set(data) != set(fields):
+            raise ValueError(f"{where} is not valid; it must be a mapping with exactly the "
+                             f"fields {', '.join(fields)}")
+        raw = data["settings"]
+        if not isinstance(raw, list) or not all(isinstance(s, Mapping) for s in raw):
+            raise ValueError(f"{where}: settings is not valid; it must be a list of mappings")
+        try:
+            settings = tuple(Setting(**s) for s in raw)
+        except TypeError as exc:
+            raise ValueError(f"{where}: settings is not valid; {exc}") from None
+        ref = data["reference"]
+        if (not isinstance(ref, int) or isinstance(ref, bool)
+                or not 0 <= ref < len(settings)):
+            raise ValueError(f"{where}: reference = {ref!r} is not valid; it must be an index "
+                             f"into settings, 0..{len(settings) - 1}")
+        rest = {k: data[k] for k in fields if k not in ("settings", "reference")}
+        for k in ("seeds", "load_levels"):
+            if isinstance(rest[k], list):
+                rest[k] = tuple(rest[k])
+        return cls(settings, reference=settings[ref], **rest)
 
 
 def _base(base: object) -> Setting:

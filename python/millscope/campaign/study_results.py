@@ -7,22 +7,27 @@ and the study's table, CSV and Markdown (:class:`StudyResult`); see
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import math
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .. import _checks
 from .._files import atomic_write
+from .._frames import Kind, frame, frame_text
 from ..calibration.logfit import log_fit, per_unit
 from ..model.presets import pilot_mill
 from ..signal.record import TorqueRecord
-from .study_plans import COSTS, KNOBS, QUANTITIES, Setting, StudyPlan
+from .study_plans import COSTS, KNOBS, LEVEL_QUANTITIES, QUANTITIES, Setting, StudyPlan
+
+if TYPE_CHECKING:
+    from pandas import DataFrame
 
 __all__ = ["QuantityError", "SettingSummary", "StudyResult", "StudyRow", "StudyRun"]
 
@@ -58,6 +63,9 @@ class StudyRun:
         Length of the analysed block, N samples x sample_dt, s.
     mean_torque, lth_amplitude, energy : float
         Of the block as the campaign analyses it: N m, N m, (N m)^2 s (not normalised).
+    derived : bool
+        Cut from the record of a longer run (:meth:`StudyPlan.donor`, whose hash ``hash``
+        is); ``wall_s`` is then an estimate, the donor's in proportion to particle-steps.
     """
 
     setting: int
@@ -73,6 +81,7 @@ class StudyRun:
     mean_torque: float
     lth_amplitude: float
     energy: float
+    derived: bool = False
 
     def value(self, quantity: str, length_m: float, block_s: float) -> float:
         """``quantity`` of this run on the footing of a run of drum length ``length_m`` (m)
@@ -136,9 +145,9 @@ class StudyRow:
     particle_steps : float
         Particles x time steps of one run, settling included (mean over the seeds).
     quantities : mapping of str to QuantityError
-        ``"mean_torque"``, ``"energy"``, ``"lth_amplitude"`` and ``"slope_a"`` (the slope
-        is a property of the setting, the same on each of its levels; nan entries with one
-        load level).
+        ``"mean_torque"``, ``"energy"``, ``"lth_amplitude"``, ``"slope_a"`` and
+        ``"energy_ratio"`` (the last two compare load levels: the same on each of the
+        setting's levels; nan entries with one load level).
     """
 
     setting: Setting
@@ -222,6 +231,9 @@ class StudyResult:
         The campaign store holding the runs' records.
     description : str
         The case studied, e.g. ``"balls-MS, 3 seeds, 0.71 of critical speed"``.
+    pending : tuple of Setting
+        Settings of the plan not tabulated because some of their runs are not finished
+        (:meth:`from_runs` with ``partial``).
     """
 
     rows: tuple[StudyRow, ...]
@@ -229,26 +241,49 @@ class StudyResult:
     runs: tuple[StudyRun, ...] = ()
     store: Path | None = None
     description: str = ""
+    pending: tuple[Setting, ...] = ()
 
     @classmethod
     def from_runs(cls, plan: StudyPlan, runs: Iterable[StudyRun], *,
-                  store: Path | None = None) -> StudyResult:
+                  store: Path | None = None, partial: bool = False) -> StudyResult:
         """The table of a plan's runs (one per setting, load level and seed).
+
+        Parameters
+        ----------
+        plan : StudyPlan
+        runs : iterable of StudyRun
+        store : Path, optional
+            The campaign store holding the runs' records.
+        partial : bool
+            Tabulate only the settings whose runs are all there (a study still under way) and
+            list the others in :attr:`pending`; the reference's runs must all be there.
 
         Raises
         ------
         ValueError
-            when a run is missing.
+            when a run is missing (with ``partial``, a run of the reference).
         """
         run_list = tuple(runs)
         by_key = {(r.setting, r.load_level, r.seed): r for r in run_list}
-        for k in range(len(plan.settings)):
-            for level in plan.load_levels:
-                for seed in plan.seeds:
-                    if (k, level, seed) not in by_key:
-                        raise ValueError(f"runs lack setting {k} ({plan.settings[k].label}) at "
-                                         f"load level {level}, seed {seed}")
+
+        def missing(k: int) -> list[tuple[int, int]]:
+            return [(level, seed) for level in plan.load_levels for seed in plan.seeds
+                    if (k, level, seed) not in by_key]
+
         ref = plan.reference_index
+        complete, pending = [], []
+        for k in range(len(plan.settings)):
+            lacking = missing(k)
+            if not lacking:
+                complete.append(k)
+            elif partial and k != ref:
+                pending.append(plan.settings[k])
+            else:
+                level, seed = lacking[0]
+                raise ValueError(f"runs lack setting {k} ({plan.settings[k].label}) at load "
+                                 f"level {level}, seed {seed}"
+                                 + (" (the reference: nothing to compare with yet)"
+                                    if partial else ""))
         first_ref = by_key[(ref, plan.load_levels[0], plan.seeds[0])]
         length_ref, block_ref = first_ref.length_m, first_ref.block_s
 
@@ -256,25 +291,28 @@ class StudyResult:
             return [by_key[(k, level, s)].value(quantity, length_ref, block_ref)
                     for s in plan.seeds]
 
-        def slopes(k: int) -> list[float]:
+        def level_values(k: int, quantity: str) -> list[float]:
+            """Per seed: the slope a of the log fit, or E(last level) / E(first level)."""
             if len(plan.load_levels) < 2:
                 return []
             out = []
             for s in plan.seeds:
                 energies = [by_key[(k, level, s)].energy for level in plan.load_levels]
-                out.append(log_fit(plan.load_levels, per_unit(energies)).a)
+                out.append(log_fit(plan.load_levels, per_unit(energies)).a
+                           if quantity == "slope_a" else energies[-1] / energies[0])
             return out
 
-        ref_slopes = slopes(ref)
         rows = []
-        for k, setting in enumerate(plan.settings):
-            slope = (_statistics(slopes(k), ref_slopes, k == ref)
-                     if ref_slopes else _NAN_ERROR)
+        for k in complete:
+            setting = plan.settings[k]
+            across = {q: (_statistics(level_values(k, q), level_values(ref, q), k == ref)
+                          if len(plan.load_levels) > 1 else _NAN_ERROR)
+                      for q in LEVEL_QUANTITIES}
             for level in plan.load_levels:
                 group = [by_key[(k, level, s)] for s in plan.seeds]
                 stats = {q: _statistics(values(k, level, q), values(ref, level, q), k == ref)
-                         for q in ("mean_torque", "energy", "lth_amplitude")}
-                stats["slope_a"] = slope
+                         for q in QUANTITIES if q not in LEVEL_QUANTITIES}
+                stats.update(across)
                 first = group[0]
                 scene = plan.scene(setting, level)
                 paper = pilot_mill(plan.speed_fraction, plan.particles, level, "paper")
@@ -286,12 +324,13 @@ class StudyResult:
                     shear_modulus_ratio=ratio, length_m=first.length_m, seeds=len(group),
                     wall_s=float(np.mean([r.wall_s for r in group])),
                     particle_steps=float(np.mean([r.particle_steps for r in group])),
-                    quantities=stats))
+                    quantities={q: stats[q] for q in QUANTITIES}))
         name = pilot_mill(plan.speed_fraction, plan.particles, plan.load_levels[0]).name
         if len(plan.load_levels) > 1:
             name = f"{name.split('#')[0]} #{', #'.join(str(v) for v in plan.load_levels)}"
         return cls(tuple(rows), plan, run_list, store,
-                   f"{name}, {len(plan.seeds)} seeds, {plan.speed_fraction:g} of critical speed")
+                   f"{name}, {len(plan.seeds)} seeds, {plan.speed_fraction:g} of critical speed",
+                   tuple(pending))
 
     # -- queries -------------------------------------------------------------------------------
     @property
@@ -395,34 +434,45 @@ class StudyResult:
         return TorqueRecord.load(self.store / "cases" / f"{run.hash}.npz")
 
     # -- tables --------------------------------------------------------------------------------
+    def to_frame(self) -> DataFrame:
+        """The table as a pandas DataFrame, one row per row of :attr:`rows` (setting and load
+        level), in order; the columns of :meth:`to_csv`.
+
+        Columns: ``label`` (str), ``reference`` (bool), the knobs (:data:`KNOBS`:
+        ``dt_fraction`` (time step / Rayleigh time), ``shear_modulus_factor`` (nan for the
+        scale's own), ``record_s`` and ``warm_up_s`` (s), float64; ``sampling`` and ``scale``,
+        str), ``load_level`` (int64), ``n_particles`` (int64), ``dt_s`` (s),
+        ``shear_modulus_ratio``, ``length_m`` (m), float64, ``seeds`` (int64), ``wall_s``
+        (s, one run), ``particle_steps`` (one run), float64, then per quantity ``<q>`` of
+        :data:`QUANTITIES` (its unit there: N m, (N m)^2 s or none) the five float64 columns
+        ``<q>``, ``<q>_std``, ``<q>_error``, ``<q>_spread``, ``<q>_error_se``
+        (:class:`QuantityError`), and ``description`` (str, the same on every row).
+        """
+        rows = []
+        for r in self.rows:
+            row: dict[str, Any] = {"label": r.label, "reference": r.reference,
+                                   **r.setting.to_dict(), "load_level": r.load_level,
+                                   "n_particles": r.n_particles, "dt_s": r.dt_s,
+                                   "shear_modulus_ratio": r.shear_modulus_ratio,
+                                   "length_m": r.length_m, "seeds": r.seeds, "wall_s": r.wall_s,
+                                   "particle_steps": r.particle_steps,
+                                   "description": self.description}
+            for q in QUANTITIES:
+                row.update(zip(_quantity_columns(q), dataclasses.astuple(r.quantities[q]),
+                               strict=True))
+            rows.append(row)
+        return frame(_COLUMNS, rows)
+
     def to_csv(self, path: str | os.PathLike[str] | None = None) -> str:
         """The table as CSV, one line per row (setting and load level); written atomically to
         ``path`` when given. Returns the text.
 
-        Columns: ``label``, ``reference`` (1/0), the knobs (:data:`KNOBS`;
-        ``shear_modulus_factor`` empty for the scale's own), ``load_level``,
-        ``n_particles``, ``dt_s``, ``shear_modulus_ratio``, ``length_m``, ``seeds``,
-        ``wall_s``, ``particle_steps``, then per quantity ``<q>``, ``<q>_std``,
-        ``<q>_error``, ``<q>_spread``, ``<q>_error_se`` (:class:`QuantityError`), and
-        ``description``. Floats are written exactly (``repr``).
+        The columns of :meth:`to_frame`, ``reference`` written 1/0; floats are written
+        exactly, nan (e.g. ``shear_modulus_factor`` for the scale's own) as an empty field.
         """
-        buffer = io.StringIO()
-        writer = csv.writer(buffer, lineterminator="\n")
-        writer.writerow(_csv_columns())
-        for r in self.rows:
-            knobs = r.setting.to_dict()
-            line: list[Any] = [r.label, int(r.reference)]
-            line += ["" if knobs[k] is None else knobs[k] if isinstance(knobs[k], str)
-                     else _plain(knobs[k]) for k in KNOBS]
-            line += [r.load_level, r.n_particles, _plain(r.dt_s), _plain(r.shear_modulus_ratio),
-                     _plain(r.length_m), r.seeds, _plain(r.wall_s), _plain(r.particle_steps)]
-            for q in QUANTITIES:
-                e = r.quantities[q]
-                line += [_plain(e.mean), _plain(e.std), _plain(e.error), _plain(e.spread),
-                         _plain(e.error_se)]
-            line.append(self.description)
-            writer.writerow(line)
-        text = buffer.getvalue()
+        table = self.to_frame()
+        table["reference"] = table["reference"].astype("int64")
+        text = frame_text(table, "csv")
         if path is not None:
             with atomic_write(path, "w") as fh:
                 fh.write(text)
@@ -443,7 +493,10 @@ class StudyResult:
         except FileNotFoundError:
             raise ValueError(f"{source}: no such study table") from None
         reader = csv.DictReader(io.StringIO(text))
-        missing = [c for c in _csv_columns() if c not in (reader.fieldnames or [])]
+        # Quantities added after a table was written read as nan; everything else must be there.
+        optional = {c for q in LEVEL_QUANTITIES for c in _quantity_columns(q)}
+        missing = [c for c in _csv_columns()
+                   if c not in (reader.fieldnames or []) and c not in optional]
         if missing:
             raise ValueError(f"{source}: not a millscope study table; missing columns "
                              f"{missing}")
@@ -453,9 +506,10 @@ class StudyResult:
                 knobs: dict[str, Any] = {k: line[k] for k in KNOBS}
                 for k in ("dt_fraction", "record_s", "warm_up_s"):
                     knobs[k] = float(knobs[k])
-                g = knobs["shear_modulus_factor"]
-                knobs["shear_modulus_factor"] = None if g == "" else float(g)
-                quantities = {q: QuantityError(*(float(line[c]) for c in _quantity_columns(q)))
+                g = _float(knobs["shear_modulus_factor"])
+                knobs["shear_modulus_factor"] = None if math.isnan(g) else g
+                quantities = {q: QuantityError(*(_float(line.get(c) or "")
+                                                 for c in _quantity_columns(q)))
                               for q in QUANTITIES}
                 rows.append(StudyRow(
                     setting=Setting(**knobs), reference=line["reference"] == "1",
@@ -472,18 +526,19 @@ class StudyResult:
             raise ValueError(f"{source}: no row is marked as the reference")
         return cls(tuple(rows), description=description)
 
-    def to_markdown(self, pareto_quantity: str = "energy") -> str:
+    def to_markdown(self, pareto_quantity: str = "energy", cost: str = "wall_s") -> str:
         """The table in Markdown: per row the setting, its cost, and per quantity the error of
         the seed mean with the seed spread of one run, ``+3.1 % ± 2.0 %``; the reference row
         gives its seed means instead. Settings on the Pareto front of ``pareto_quantity``
-        (cost: wall time) are marked with a ◆.
+        against ``cost`` (``"wall_s"`` or ``"particle_steps"``) are marked with a ◆.
         """
-        front = set(self.pareto(pareto_quantity))
+        front = set(self.pareto(pareto_quantity, cost))
         shown = [q for q in QUANTITIES
                  if any(math.isfinite(r.quantities[q].error) for r in self.rows)]
         multi = len({r.load_level for r in self.rows}) > 1
         names = {"mean_torque": "mean torque", "energy": "energy",
-                 "lth_amplitude": "LTH amplitude", "slope_a": "slope a"}
+                 "lth_amplitude": "LTH amplitude", "slope_a": "slope a",
+                 "energy_ratio": "per-unit energy"}
         head = ["setting", *(["level"] if multi else []), "dt (s)", "G / paper's",
                 "wall s / run", "particle-steps / run", *(names[q] for q in shown)]
         lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -516,14 +571,26 @@ class StudyResult:
             "Torques are compared per length of drum and energies per length of drum and of "
             "block (see millscope.studies). Wall time: one run (engine set-up, filling, "
             "settling, warm-up and block) on the plan's engine threads. ◆: on the Pareto front "
-            f"of wall time against the {names[pareto_quantity]} error.",
+            f"of {'wall time' if cost == 'wall_s' else 'particle-steps'} against the "
+            f"{names[pareto_quantity]} error.",
         ]
+        ref_ratio = ref_row.quantities["energy_ratio"]
+        if math.isfinite(ref_ratio.spread):
+            seeds = ref_row.seeds
+            se = ref_ratio.spread / math.sqrt(seeds)
+            need = math.ceil(seeds * (se / 0.05) ** 2)
+            notes += ["", f"Per-unit energy of the reference: {ref_ratio.mean:.4g}, standard "
+                      f"error {100 * se:.1f} % from {seeds} seeds; a 5 % standard error needs "
+                      f"{max(need, 2)} seeds" + (" (met)." if se <= 0.05 else ".")]
+        if self.pending:
+            notes += ["", "Not finished yet (left out): "
+                      + "; ".join(s.label for s in self.pending) + "."]
         return "\n".join(notes) + "\n"
 
 
-def _plain(value: float) -> str:
-    """A float as CSV text that reads back exactly."""
-    return repr(float(value))
+def _float(text: str) -> float:
+    """A CSV field as a float; an empty field (a missing value) is nan."""
+    return math.nan if text == "" else float(text)
 
 
 def _quantity_columns(quantity: str) -> tuple[str, ...]:
@@ -532,8 +599,16 @@ def _quantity_columns(quantity: str) -> tuple[str, ...]:
 
 
 def _csv_columns() -> list[str]:
-    columns = ["label", "reference", *KNOBS, "load_level", "n_particles", "dt_s",
-               "shear_modulus_ratio", "length_m", "seeds", "wall_s", "particle_steps"]
-    for q in QUANTITIES:
-        columns += _quantity_columns(q)
-    return [*columns, "description"]
+    return list(_COLUMNS)
+
+
+#: The columns of the table (:meth:`StudyResult.to_frame`) with how each is stored.
+_COLUMNS: dict[str, Kind] = {
+    "label": "str", "reference": "bool",
+    **{k: "str" if k in ("sampling", "scale") else "float" for k in KNOBS},
+    "load_level": "int", "n_particles": "int",
+    "dt_s": "float", "shear_modulus_ratio": "float", "length_m": "float", "seeds": "int",
+    "wall_s": "float", "particle_steps": "float",
+    **{c: "float" for q in QUANTITIES for c in _quantity_columns(q)},
+    "description": "str",
+}

@@ -379,15 +379,15 @@ def _pairs_within(x: NDArray[np.float64], radius: NDArray[np.float64], gap_max: 
 
     r_max = float(np.max(radius)) if len(radius) else 0.0
     points = x.copy()
-    box = None
+    box: NDArray[np.float64] | None = None
     if period:
         # cKDTree wraps every axis given a box: x and y get one far larger than the drum
         lo = points[:, :2].min(axis=0)
         points[:, :2] -= lo
         span = float(points[:, :2].max()) + 4.0 * (2.0 * r_max + gap_max) + 1.0
         points[:, 2] %= period
-        box = [span, span, period]
-    tree = cKDTree(points, boxsize=box)
+        box = np.array([span, span, period])
+    tree = cKDTree(points) if box is None else cKDTree(points, boxsize=box)
     candidates = tree.query_pairs(2.0 * r_max + gap_max, output_type="ndarray")
     if len(candidates) == 0:
         return [], []

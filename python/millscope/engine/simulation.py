@@ -10,6 +10,7 @@ Life of a simulation::
     sim = Simulation(scene, seed=0)        # checks dt against the stability limit; runs nothing
     rec = sim.run(14.0)                    # fills, settles, starts the drum, records 14 s
     rec2 = sim.run(2.0)                    # continues (times go on from 14 s)
+    sim.run(1.0, snapshot_every=5, snapshot_dir="vtk")  # with VTK snapshots for ParaView
     sim.save("case.ckpt"); sim = Simulation.load("case.ckpt")
 
 * **Filling** (:meth:`Simulation.fill`): every fraction, largest first, goes onto a loose cubic
@@ -49,14 +50,19 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import _core
+from .. import _checks, _core
 from .._files import atomic_write
 from ..model.scene import Scene
 from ..model.stiffness import time_step_limit, upper_impact_speed
 from ..signal.record import TorqueRecord
 from . import checkpoint as _checkpoint
+from .snapshots import ChargeSnapshot, VtkSeries, check_folder
 
-__all__ = ["CheckpointError", "SettleReport", "SettleWarning", "Simulation", "check_threads"]
+__all__ = ["CheckpointError", "Sampling", "SettleReport", "SettleWarning", "Simulation",
+           "check_threads"]
+
+#: how a torque sample is taken: the value at its instant, or the mean over its interval
+Sampling = Literal["instant", "mean"]
 
 CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"; 3: "order"
 _FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
@@ -115,9 +121,9 @@ class SettleReport:
 
 Phase = Literal["empty", "filled", "settled", "rotating"]
 _PHASES: tuple[Phase, ...] = ("empty", "filled", "settled", "rotating")
-#: The arrays of the engine's snapshot, saved as .npy members of a checkpoint.
-_SNAPSHOT_ARRAYS = ("order", "x", "v", "w", "f", "t", "x_ref", "wall_history", "wall_lifter",
-                    "list_start", "list_partner", "list_history")
+#: The arrays of the engine's snapshot, saved as .npy members of a checkpoint (listed once, in
+#: the engine: Engine::Snapshot::for_each_field).
+_SNAPSHOT_ARRAYS: tuple[str, ...] = tuple(_core.SNAPSHOT_ARRAYS)
 
 
 class Simulation:
@@ -188,6 +194,8 @@ class Simulation:
         self.settle_report: SettleReport | None = None
         #: Torque of the drum's parts over the last run, N m: "shell", "lifters", "ends".
         self.last_parts: dict[str, NDArray[np.float64]] = {}
+        #: The VTK series written into each folder (:meth:`write_vtk`, run's snapshots).
+        self._series: dict[Path, VtkSeries] = {}
 
     # -- facts -----------------------------------------------------------------------------
     @property
@@ -223,7 +231,7 @@ class Simulation:
         """Time since the start of rotation, s (0 before it)."""
         if self._phase != "rotating":
             return 0.0
-        return (self._engine.step_count - self._engine.rotation_start_step) * self.dt
+        return float((self._engine.step_count - self._engine.rotation_start_step) * self.dt)
 
     @property
     def drum_angle(self) -> float:
@@ -280,6 +288,41 @@ class Simulation:
         out.update(e.ledger())
         return {k: float(v) for k, v in out.items()}
 
+    def snapshot(self) -> ChargeSnapshot:
+        """The particles' state now (copies) with the drum's angle and angular velocity; once
+        the particles are placed (after :meth:`fill`, else ``RuntimeError``)."""
+        if self._phase == "empty":
+            raise RuntimeError("there is no charge to show yet: the drum is empty; call fill(), "
+                               "settle() or run() first")
+        e = self._engine
+        return ChargeSnapshot(
+            scene=self._scene, time_s=self.time, step=int(e.step_count),
+            drum_angle=self.drum_angle, omega=float(e.omega),
+            positions=self.positions.copy(), velocities=self.velocities.copy(),
+            spins=self.spins.copy(), radii=self._scene.particle_radii(),
+            materials=self._scene.particle_materials())
+
+    def write_vtk(self, folder: str | os.PathLike[str]) -> tuple[Path, Path]:
+        """Writes the state now into the VTK series in ``folder`` (made if missing), for
+        ParaView: the particles, the drum at the same angle and the ``.pvd`` collections
+        (:mod:`millscope.engine.snapshots` describes the files). A folder not writable raises
+        ``ValueError`` naming it.
+
+        Returns
+        -------
+        (Path, Path)
+            The particle file and the drum file written.
+        """
+        return self._vtk_series("folder", folder).add(self.snapshot())
+
+    def _vtk_series(self, where: str, folder: str | os.PathLike[str]) -> VtkSeries:
+        """The series this simulation writes into ``folder`` (checked, see VtkSeries)."""
+        path = check_folder(where, folder)
+        key = path.resolve()
+        if key not in self._series:
+            self._series[key] = VtkSeries(path, up_to_step=int(self._engine.step_count))
+        return self._series[key]
+
     def max_overlap_ratio(self) -> float:
         """Largest contact overlap over the radius of the smaller body (dimensionless)."""
         return float(self._engine.max_overlap_ratio())
@@ -335,8 +378,9 @@ class Simulation:
 
     # -- running -----------------------------------------------------------------------------
     def run(self, duration: float, sample_dt: float = 0.01,
-            sampling: Literal["instant", "mean"] = "instant", *,
-            progress: bool = True) -> TorqueRecord:
+            sampling: Sampling = "instant", *,
+            progress: bool = True, snapshot_every: int | None = None,
+            snapshot_dir: str | os.PathLike[str] | None = None) -> TorqueRecord:
         """Runs the rotating mill for ``duration`` s and returns its drive torque.
 
         The first call fills and settles the charge and starts the drum; record time 0 is the
@@ -352,6 +396,18 @@ class Simulation:
             Instantaneous torque at each sample time, or the mean over each interval.
         progress : bool
             Show a tqdm progress bar.
+        snapshot_every : int, optional
+            Write a VTK snapshot (:meth:`write_vtk`) into ``snapshot_dir`` after every torque
+            sample whose index k (t_k = k sample_dt) is a multiple of this, >= 1: the state then
+            is that of the step the sample was taken at. The run is cut there into the same
+            engine calls a resumed run makes, so the torque is the same to the bit as without
+            snapshots. A snapshot that cannot be written warns and the run goes on without
+            further snapshots.
+        snapshot_dir : path-like, optional
+            The folder of the snapshots (made if missing, must be writable); given together with
+            ``snapshot_every``. The series there goes on where this simulation's state is (a run
+            continued from a checkpoint keeps the earlier snapshots; a new simulation starts
+            afresh).
 
         Returns
         -------
@@ -371,11 +427,18 @@ class Simulation:
         if sampling not in ("instant", "mean"):
             raise ValueError(f"sampling = {sampling!r} is not valid; it must be 'instant' or "
                              "'mean'")
+        snapshots = snapshot_every is not None or snapshot_dir is not None
+        every = _checks.count("snapshot_every", snapshot_every) if snapshots else 0
+        if snapshots and snapshot_dir is None:
+            raise _checks.fail("snapshot_dir", None, "a writable folder when snapshot_every is "
+                               "given")
         self._check_steps("duration", duration + sample_dt)
         count = int(round(duration / sample_dt))
         if count < 2:
             raise ValueError(f"duration = {duration} s is not valid; it must hold at least 2 "
                              f"samples of sample_dt = {sample_dt} s")
+        series = (None if snapshot_dir is None
+                  else self._vtk_series("snapshot_dir", snapshot_dir))
         if self._phase in ("empty", "filled"):
             self.settle(progress=progress)
         if self._phase == "settled":
@@ -386,16 +449,26 @@ class Simulation:
         max_steps = self._steps_per_call()
         rows: list[NDArray[np.float64]] = []
         taken = 0
+        last_index: int | None = None  # index k of the last sample taken (with snapshots)
         with _progress(progress, count * sample_dt, "simulating", "s") as bar, \
                 _interrupt_flag() as stop:
             while taken < count and not stop.is_set():
                 before = self.time
+                want = count - taken
+                if series is not None:
+                    # Up to the next sample index that is a multiple of `every` (one sample
+                    # first, to learn where the run starts).
+                    want = min(want, 1 if last_index is None else every - last_index % every)
                 # Calls of at most max_steps steps, each going on with the sample under way.
-                out = np.asarray(e.advance_sampled(sample_dt, sampling == "mean", count - taken,
+                out = np.asarray(e.advance_sampled(sample_dt, sampling == "mean", want,
                                                    max_steps, bool(rows)))
                 rows.append(out)
                 taken += len(out)
                 bar.update(self.time - before)
+                if series is not None and len(out):
+                    last_index = int(round(out[-1, 0] / sample_dt))
+                    if last_index % every == 0:
+                        series = self._snapshot_into(series)
             interrupted = taken < count
         if interrupted:
             warnings.warn(f"run interrupted: kept {taken} of {count} samples", RuntimeWarning,
@@ -404,6 +477,18 @@ class Simulation:
         self.last_parts = {"shell": data[:, 2], "lifters": data[:, 3], "ends": data[:, 4]}
         meta = self._meta(sample_dt, sampling, interrupted)
         return TorqueRecord(data[:, 0], data[:, 1], meta)
+
+    def _snapshot_into(self, series: VtkSeries) -> VtkSeries | None:
+        """Adds the state now to ``series``; None (no more snapshots) when it cannot be
+        written, with a warning: the run and its torque matter more than its pictures."""
+        try:
+            series.add(self.snapshot())
+        except OSError as exc:
+            warnings.warn(f"a VTK snapshot could not be written into {series.folder} "
+                          f"({exc}); the run goes on without snapshots", RuntimeWarning,
+                          stacklevel=3)
+            return None
+        return series
 
     def _steps_per_call(self) -> int:
         """The most steps one call into the engine may take (see _CHUNK_PARTICLE_STEPS)."""
@@ -464,7 +549,9 @@ class Simulation:
         }
         path = Path(path)
         with atomic_write(path, "wb") as f:
-            np.savez(f, meta_json=np.array(json.dumps(meta)), **arrays)
+            # allow_pickle=False: the snapshot holds numeric arrays only (and no array key can
+            # take the place of the keyword)
+            np.savez(f, allow_pickle=False, meta_json=np.array(json.dumps(meta)), **arrays)
         return path
 
     @classmethod
@@ -559,7 +646,7 @@ class Simulation:
                                    phase, scene, dt)
         n = scene.n_particles
         partners = ck.max_partners(scene, sim._engine.skin)
-        history_size = 3 if template["wall_history"].size else 0  # friction: a spring per pair
+        history_size = int(sim._engine.history_size)  # the law's, per pair and wall slot
         limits = {"list_start": n + 1, "list_partner": partners,
                   "list_history": history_size * partners}
         arrays = {k: ck.read_npy(zf, found[k], template[k].dtype,
@@ -622,7 +709,7 @@ def threads_range() -> str:
 
 
 def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
-                 track_energy: bool) -> Any:
+                 track_energy: bool) -> _core.Engine:
     drum = scene.drum
     lifters = drum.lifters
     geometry_args: dict[str, Any] = {

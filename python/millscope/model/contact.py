@@ -79,7 +79,7 @@ def _number(value: object, name: str) -> float:
             value = float(value)  # type: ignore[arg-type]  # numpy scalars and the like
         except (TypeError, ValueError):
             raise ValueError(f"{name} = {value!r} is not valid; it must be a number") from None
-    return float(value)  # type: ignore[arg-type]
+    return float(value)
 
 
 def _positive(value: object, name: str, unit: str) -> float:
@@ -331,7 +331,7 @@ def verlet_stability_bound(damping_ratio: float) -> float:
     """Largest w0 dt at which the engine's velocity Verlet integrates a damped oscillator
     stably, 2 (sqrt(1 + zeta^2) - zeta) (dimensionless).
 
-    The engine's step (``engine_kernels.hpp``; ``contact_probe.cpp`` the same): half a kick
+    The engine's step (``cpp/src/step/``; ``contact_probe.cpp`` the same): half a kick
     with the force of the step before, a drift, the contact force evaluated at the new
     position with the half-step velocity, the second half kick. The two half kicks between
     drifts join, so for m x'' + c x' + k x = 0 (w0^2 = k / m, zeta = c / (2 sqrt(k m)),

@@ -708,7 +708,7 @@ class Scene:
             raise SceneError(f"{path}: {exc}") from None
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> Scene:
+    def from_dict(cls, d: object) -> Scene:
         """The Scene of a :meth:`to_dict` dict, validated.
 
         Keys whose field has a default may be left out; an unknown key, a missing required
@@ -723,7 +723,7 @@ class Scene:
             raise SceneError(str(exc)) from None
 
     @classmethod
-    def _from_dict(cls, d: Mapping[str, Any]) -> Scene:
+    def _from_dict(cls, d: object) -> Scene:
         """:meth:`from_dict`, raising ValueError."""
         if not isinstance(d, Mapping):
             raise ValueError(

@@ -65,8 +65,8 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from numbers import Real
 
+from .. import _checks
 from .contact import (
     DEFAULT_DT_FRACTION,
     DT_SAFETY_FACTOR,
@@ -424,8 +424,7 @@ class TimeStepLimit:
     def check(self, dt: object, name: str = "dt") -> float:
         """``dt`` as float if finite and in (0, self.dt], else ValueError naming ``name``, the
         value, the limit, the pair and the mode."""
-        ok = isinstance(dt, Real) and not isinstance(dt, bool)
-        x = float(dt) if ok else math.nan  # type: ignore[arg-type]
+        x = _checks.as_float(dt)  # nan when not a real number
         if not (math.isfinite(x) and 0.0 < x <= self.dt):
             raise ValueError(f"{name} = {dt!r} s is not valid; it must be {self.valid_range()}")
         return x
@@ -614,8 +613,7 @@ def _in_range(name: str, value: object, unit: str, low: float, high: float, vali
               low_open: bool = True) -> float:
     """``value`` as float if finite and in (low, high] (or [low, high]); else ValueError
     ``"<name> = <value> <unit> is not valid; it must be <valid>"``."""
-    ok = isinstance(value, Real) and not isinstance(value, bool)
-    x = float(value) if ok else math.nan  # type: ignore[arg-type]
+    x = _checks.as_float(value)  # nan when not a real number
     inside = (x > low if low_open else x >= low) and x <= high
     if not (math.isfinite(x) and inside):
         raise ValueError(f"{name} = {value!r} {unit} is not valid; it must be {valid}")

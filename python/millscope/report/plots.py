@@ -1,4 +1,5 @@
-"""Figures of the paper's section 6 (Figs. 2, 9-15). Every function returns a Figure.
+"""Figures of the paper's section 6 (Figs. 2, 9-15) and a cross-section of the charge. Every
+function returns a Figure.
 
 Figures are built with :class:`matplotlib.figure.Figure` directly, never through pyplot, so they
 hold no global state (nothing to close, nothing leaks), work headless without choosing a backend,
@@ -9,7 +10,7 @@ panels of a larger figure, as in Fig. 10 a-g) and return the figure that holds i
 labels are set only when the function made the figure or when they are passed explicitly.
 
 Units: time in s, frequency in Hz, torque and spectral amplitude in N m; energies are shown per
-unit of the group's largest energy (docs/architecture.md, Spectra).
+unit of the group's largest energy (docs/architecture.md, Spectra); lengths in m, speeds in m/s.
 """
 
 from __future__ import annotations
@@ -21,10 +22,15 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.collections import EllipseCollection
+from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.patches import Circle, Polygon
 from matplotlib.ticker import FuncFormatter, NullFormatter
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _checks
+from .._drum_shape import lifter_outlines
 from .._files import atomic_write
 from ..calibration.fit import LogFit
 from ..signal.record import TorqueRecord
@@ -32,10 +38,12 @@ from ..signal.spectral import Spectrum
 
 if TYPE_CHECKING:  # the figures stay below the simulation side (docs/architecture.md, Layers)
     from ..campaign.studies import StudyResult
+    from ..engine.simulation import Simulation
+    from ..engine.snapshots import ChargeSnapshot
 
 __all__ = ["plot_torque", "plot_spectrum", "plot_filtered", "plot_waterfall",
            "plot_spectra_grid", "plot_torque_levels", "plot_lth_levels", "plot_energy_levels",
-           "plot_energy_fit", "plot_energy_fits", "plot_accuracy", "save_figure"]
+           "plot_energy_fit", "plot_energy_fits", "plot_accuracy", "plot_charge", "save_figure"]
 
 
 class _NamedLine(Protocol):
@@ -108,7 +116,7 @@ def _line(item: LineSpec) -> tuple[str, float]:
         return str(name), float(freq)
     if hasattr(item, "frequency_hz"):
         return str(getattr(item, "name", "")), float(item.frequency_hz)
-    return "", float(item)  # type: ignore[arg-type]
+    return "", float(item)
 
 
 def _set_title(ax: Axes, title: str | None, default: str, made: bool) -> None:
@@ -739,7 +747,8 @@ def plot_energy_fits(groups: Mapping[str, tuple[ArrayLike, ArrayLike, LogFit | N
 
 # -- error against run time (millscope.studies) ---------------------------------------------
 _QUANTITY_NAMES = {"mean_torque": "mean torque", "energy": "spectral energy",
-                   "lth_amplitude": "LTH amplitude", "slope_a": "log-fit slope a"}
+                   "lth_amplitude": "LTH amplitude", "slope_a": "log-fit slope a",
+                   "energy_ratio": "per-unit energy E(last level) / E(first)"}
 _COST_NAMES = {"wall_s": "wall-clock time per run (s)", "particle_steps": "particle-steps per run"}
 
 
@@ -773,7 +782,7 @@ def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = 
     Parameters
     ----------
     result : StudyResult
-    quantity : {"mean_torque", "energy", "lth_amplitude", "slope_a"}
+    quantity : {"mean_torque", "energy", "lth_amplitude", "slope_a", "energy_ratio"}
     cost : {"wall_s", "particle_steps"}
         The x axis (log scale).
     ax : Axes, optional
@@ -824,6 +833,93 @@ def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = 
                made)
     _grid(ax)
     ax.legend(fontsize="small")
+    return fig
+
+
+# -- the charge ------------------------------------------------------------------------------
+def charge_slab(snap: ChargeSnapshot, z_range: tuple[float, float] | None = None
+                ) -> NDArray[np.bool_]:
+    """Which particles :func:`plot_charge` draws: those whose centre z lies in ``z_range``
+    (m, both ends included); by default within one largest sphere diameter of mid-length
+    (the whole charge of a slice up to two diameters long, such as the "small" and "tiny"
+    scales)."""
+    z = np.asarray(snap.positions)[:, 2]
+    if z_range is None:
+        half, mid = snap.scene.max_diameter, 0.5 * snap.scene.drum.length
+        return np.asarray(np.abs(z - mid) <= half)
+    if not (isinstance(z_range, tuple) and len(z_range) == 2):
+        raise _checks.fail("z_range", z_range, "None or a pair (z_low, z_high) in m")
+    low = _checks.real("z_range[0]", z_range[0], "m", "")
+    high = _checks.real("z_range[1]", z_range[1], "m", f"> z_range[0] = {low:g} m")
+    if not high > low:
+        raise _checks.fail("z_range[1]", z_range[1], f"> z_range[0] = {low:g} m", "m")
+    return np.asarray((z >= low) & (z <= high))
+
+
+def plot_charge(source: Simulation | ChargeSnapshot, *, z_range: tuple[float, float] | None = None,
+                ax: Axes | None = None, title: str | None = None, cmap: str = "viridis",
+                vmax: float | None = None) -> Figure:
+    """A cross-section of the charge coloured by speed, with the shell and the lifters at the
+    same drum angle.
+
+    The particles whose centres lie in a slab along the axis are drawn as circles of their
+    radius at their (x, y), seen from +z (x to the right, y up; the drum turns
+    counter-clockwise), the farther ones (lower z) first.
+
+    Parameters
+    ----------
+    source : Simulation or ChargeSnapshot
+        A simulation (its state now) or a snapshot (:meth:`millscope.Simulation.snapshot`).
+    z_range : (float, float), optional
+        The slab, m: particles with z_range[0] <= z <= z_range[1]. Default: within one largest
+        sphere diameter of mid-length (:func:`charge_slab`).
+    ax : Axes, optional
+        Draw here instead of in a new figure.
+    title : str, optional
+        Default "<scene name>: charge at t = <time> s" on a new figure.
+    cmap : str
+        Matplotlib colour map of the speed.
+    vmax : float, optional
+        Top of the colour scale, m/s (> 0). Default: the highest of the drawn particles' speeds
+        and the shell's speed omega R (1 m/s when both are 0).
+
+    Returns
+    -------
+    Figure
+        The figure holding the axes: ``ax.collections[0]`` holds the particles (its array the
+        speeds, m/s), ``ax.patches`` the shell and the lifters; the colour bar is labelled in m/s.
+    """
+    snap: ChargeSnapshot = source.snapshot() if hasattr(source, "snapshot") else source
+    keep = charge_slab(snap, z_range)
+    if vmax is not None:
+        vmax = _checks.positive("vmax", vmax, "m/s")
+    drum = snap.scene.drum
+    order = np.argsort(np.asarray(snap.positions)[keep, 2], kind="stable")
+    xy = np.asarray(snap.positions)[keep][order, :2]
+    diameters = 2.0 * np.asarray(snap.radii)[keep][order]
+    speeds = snap.speeds[keep][order]
+    if vmax is None:
+        top = max(float(speeds.max(initial=0.0)), abs(snap.omega) * drum.radius)
+        vmax = top if top > 0.0 else 1.0
+
+    fig, ax, made = _axes(ax, (6.4, 5.4))
+    particles = EllipseCollection(diameters, diameters, np.zeros(len(xy)), units="xy",
+                                  offsets=xy, offset_transform=ax.transData, cmap=cmap,
+                                  norm=Normalize(0.0, vmax), edgecolors="face")
+    particles.set_array(speeds)
+    ax.add_collection(particles)
+    ax.add_patch(Circle((0.0, 0.0), drum.radius, fill=False, ec="0.15", lw=1.4))
+    for outline in lifter_outlines(drum, snap.drum_angle):
+        ax.add_patch(Polygon(outline, closed=True, fc="0.6", ec="0.15", lw=0.8))
+    fig.colorbar(particles, ax=ax, label="speed (m/s)")
+    reach = 1.04 * drum.radius
+    ax.set_xlim(-reach, reach)
+    ax.set_ylim(-reach, reach)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    when = f"harge at t = {snap.time_s:.3g} s"
+    _set_title(ax, title, f"{snap.scene.name}: c{when}" if snap.scene.name else f"C{when}", made)
     return fig
 
 

@@ -34,13 +34,14 @@ from tqdm.auto import tqdm
 from .. import _core
 from .._files import atomic_write
 from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
+from ..calibration.discrimination import discrimination
 from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
 from ..campaign.cases import CaseResult
 from ..campaign.runs import Campaign
 from ..campaign.store import UnreadableCase, _listing, unreadable_cases
 from ..campaign.studies import StudyResult
 from ..model.presets import case_key
-from ..signal.spectral import PEAK_DISTINCT_RATIO, spectrum
+from ..signal.spectral import PEAK_DISTINCT_RATIO, Spectrum, spectrum
 from . import plots
 
 __all__ = ["UnreadableCasesError", "calibration_file_name", "write_report", "write_study"]
@@ -101,13 +102,13 @@ def _first_per_level(group: GroupAnalysis) -> list[CaseResult]:
 
 
 def _spectra(group: GroupAnalysis
-             ) -> tuple[list, list[str], list[float | None], list[bool]]:
+             ) -> tuple[list[Spectrum], list[str], list[float | None], list[bool]]:
     cases = _first_per_level(group)
-    spectra = []
+    spectra: list[Spectrum] = []
     for r in cases:
         assert r.record is not None
         spectra.append(spectrum(r.record.block(*group.settings.block),
-                                window=group.settings.window))  # type: ignore[arg-type]
+                                window=group.settings.window))
     labels = [r.scene.name.replace("#", "") for r in cases]
     marks = [r.lth_hz if math.isfinite(r.lth_hz) else None for r in cases]
     return spectra, labels, marks, [r.lth_distinct for r in cases]
@@ -324,6 +325,13 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
         if g.fit is not None:
             lines += [f"Fit: {g.fit.equation()}, R² = {r2_text(g.fit)}.", ""]
         lines += _group_table(g) + [""]
+        if g.levels.size >= 2:
+            lines += [discrimination(g, confidence=confidence).to_markdown(),
+                      "How well one block tells each level from the next: the share of block "
+                      "pairs whose energies fall in the right order (the lower level's larger), "
+                      "the same from normal log energies, and each block's fill estimate "
+                      "against the group's own calibration (which has seen the block, so the "
+                      "estimates are optimistic; the interval widths are the method's).", ""]
         if g.name in calibrations:
             lines += [f"Calibration: [`{calibrations[g.name]}`]({calibrations[g.name]}).", ""]
         elif g.fit is not None:
@@ -359,9 +367,10 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
 
 
 def write_study(result: StudyResult, folder: str | os.PathLike[str], stem: str = "accuracy", *,
-                quantity: str = "energy") -> list[Path]:
-    """Writes a study's ``<stem>.csv``, ``<stem>.md`` and ``<stem>.png`` (error against wall
-    time, :func:`millscope.plots.plot_accuracy`) into ``folder``, each atomically.
+                quantity: str = "energy", cost: str = "wall_s") -> list[Path]:
+    """Writes a study's ``<stem>.csv``, ``<stem>.md`` and ``<stem>.png`` (error against cost,
+    ``"wall_s"`` or ``"particle_steps"``, :func:`millscope.plots.plot_accuracy`) into
+    ``folder``, each atomically. Particle-steps do not depend on the machine or its load.
 
     Returns
     -------
@@ -372,6 +381,6 @@ def write_study(result: StudyResult, folder: str | os.PathLike[str], stem: str =
     csv_path, md_path = out / f"{stem}.csv", out / f"{stem}.md"
     result.to_csv(csv_path)
     with atomic_write(md_path, "w") as fh:
-        fh.write(result.to_markdown(quantity))
-    png = plots.save_figure(plots.plot_accuracy(result, quantity), out / f"{stem}.png")
+        fh.write(result.to_markdown(quantity, cost))
+    png = plots.save_figure(plots.plot_accuracy(result, quantity, cost=cost), out / f"{stem}.png")
     return [csv_path, md_path, png]

@@ -344,7 +344,7 @@ def _numbers(cells: Any, decimal: str, lines: NDArray[np.int64], column: _Column
 def _seconds(cells: Any, lines: NDArray[np.int64], column: _Column,
              where: str) -> tuple[NDArray[np.float64], str]:
     """ISO 8601 date-times as seconds since the first, and the first as text."""
-    import pandas as pd  # type: ignore[import-untyped]
+    import pandas as pd
 
     stamps = pd.to_datetime(cells.str.strip(), format="ISO8601", utc=True, errors="coerce")
     bad = np.flatnonzero(stamps.isna().to_numpy())
@@ -426,7 +426,7 @@ def _layout(lines: list[str], kept: list[int], sep: str | None, where: str) -> _
 def _table(lines: list[str], data: list[int], layout: _Layout, columns: int,
            where: str) -> Any:
     """The data rows as a pandas DataFrame of str, ``columns`` wide; a longer row raises."""
-    import pandas as pd  # type: ignore[import-untyped]
+    import pandas as pd
 
     limit = ("the first data row" if layout.header is None else
              f"the {len(layout.header)} of the header (line {layout.header_line})")

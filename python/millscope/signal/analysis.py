@@ -21,12 +21,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, get_args
+from typing import TYPE_CHECKING, Any, get_args
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .. import _checks
+from .._frames import Kind, frame
 from .record import TorqueRecord
 from .spectral import (
     Peak,
@@ -37,10 +38,13 @@ from .spectral import (
     spectral_energy,
 )
 
+if TYPE_CHECKING:
+    from pandas import DataFrame
+
 __all__ = ["AnalysisSettings", "BlockAnalysis", "analyze_block", "check_bandwidth",
            "sub_block_energies"]
 
-WINDOWS: tuple[str, ...] = get_args(WindowName)  # the windows spectral knows
+WINDOWS: tuple[WindowName, ...] = get_args(WindowName)  # the windows spectral knows
 MIN_SUB_BLOCK_SAMPLES = 32  # a sub-block of fewer samples loses most of its band to the removal
 MIN_SUB_BLOCKS = 3  # fewer sub-blocks give no usable spread
 
@@ -72,6 +76,28 @@ class BlockAnalysis:
     lines_hz: tuple[float, ...] = field(default_factory=tuple)
     record_length_s: float = 0.0
 
+    def to_frame(self) -> DataFrame:
+        """The analysis as a pandas DataFrame of one row.
+
+        Columns: ``record_length_s`` (TR, s), ``mean_torque_Nm`` (N m), ``lth_expected_hz``
+        and ``lth_hz`` (expected and located, Hz), ``lth_amplitude_Nm`` and ``lth_noise_Nm``
+        (N m), ``lth_snr`` (dimensionless), ``energy_Nm2s`` ((N m)^2 s),
+        ``energy_relative_std`` and ``fraction_kept`` (dimensionless), ``half_width_hz``
+        (of each removed band, Hz): float64; ``lth_distinct`` and ``widened``: bool;
+        ``window`` and ``lines_hz`` (the drive-train lines removed, Hz, separated by
+        spaces; empty for none): str.
+        """
+        e = self.energy
+        return frame(_COLUMNS, [{
+            "record_length_s": self.record_length_s, "mean_torque_Nm": self.mean_torque_Nm,
+            "lth_expected_hz": self.lth_expected_hz, "lth_hz": self.lth.frequency_hz,
+            "lth_amplitude_Nm": self.lth.amplitude, "lth_noise_Nm": self.lth.noise_amplitude,
+            "lth_snr": self.lth.snr, "lth_distinct": self.lth.distinct,
+            "energy_Nm2s": e.energy, "energy_relative_std": e.relative_std,
+            "fraction_kept": e.fraction_kept, "half_width_hz": e.half_width_hz,
+            "widened": e.widened, "window": e.window,
+            "lines_hz": " ".join(repr(float(f)) for f in self.lines_hz)}])
+
     def summary(self) -> str:
         """A short plain-text report."""
         e = self.energy
@@ -88,6 +114,15 @@ class BlockAnalysis:
             f"spectral energy        {e.energy:.6g} (N m)^2 s "
             f"(mean and lines removed, {100 * e.fraction_kept:.1f} % of the band kept)",
         ])
+
+
+#: The columns of :meth:`BlockAnalysis.to_frame` with how each is stored.
+_COLUMNS: dict[str, Kind] = {
+    "record_length_s": "float", "mean_torque_Nm": "float", "lth_expected_hz": "float",
+    "lth_hz": "float", "lth_amplitude_Nm": "float", "lth_noise_Nm": "float",
+    "lth_snr": "float", "lth_distinct": "bool", "energy_Nm2s": "float",
+    "energy_relative_std": "float", "fraction_kept": "float", "half_width_hz": "float",
+    "widened": "bool", "window": "str", "lines_hz": "str"}
 
 
 def check_bandwidth(name: str, bandwidth: object, lth_hz: float,
@@ -155,7 +190,7 @@ class AnalysisSettings:
 
     block: tuple[float, float]
     bandwidth: float = 0.3
-    window: str = "hann"
+    window: WindowName = "hann"
 
     def __post_init__(self) -> None:
         try:
@@ -236,5 +271,5 @@ def sub_block_energies(block: TorqueRecord, *, lth_hz: float | None, sub_blocks:
     t, x = block.time_s, block.torque_Nm
     return np.array([
         spectral_energy(TorqueRecord(t[k * size:(k + 1) * size], x[k * size:(k + 1) * size]),
-                        remove, bandwidth=bandwidth, window=window).energy  # type: ignore[arg-type]
+                        remove, bandwidth=bandwidth, window=window).energy
         for k in range(m)])

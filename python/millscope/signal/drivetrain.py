@@ -66,7 +66,6 @@ from fractions import Fraction
 from typing import Any
 
 import numpy as np
-import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _checks
@@ -587,6 +586,10 @@ def decimate(time_s: ArrayLike, torque: ArrayLike, target_hz: float, *,
                          f"down <= 1000 is {ratio}, giving {reached_hz:g} Hz; it must be a "
                          "reduction within 0.1 % of target_hz (decimate in two steps for ratios "
                          "below 1/1000)")
+    # scipy.signal takes a large part of a second to import: loaded here, on first use, so
+    # that `import millscope` stays quick
+    import scipy.signal as ss
+
     y = ss.resample_poly(x, ratio.numerator, ratio.denominator, padtype="line")
     return t[0] + np.arange(y.size) / reached_hz, np.asarray(y, dtype=np.float64)
 

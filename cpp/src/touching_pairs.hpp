@@ -1,7 +1,7 @@
 // The first phase of the engine's pair pass, in AVX-512 registers: which listed pairs of a
 // block of Verlet list rows touch (|x_i - x_j| < r_i + r_j), packed in list order.
 //
-// The portable search in the engine (engine_kernels.hpp, Engine::Access::run) tests one listed
+// The portable search in the engine (step/pair_pass_lanes.hpp) tests one listed
 // pair at a time and branches on the answer; a third of the pairs touch, so the branch is
 // mispredicted about once a row, and each test waits on its own loads. Here 8 listed pairs are
 // tested at once: the partners' positions and radii gathered, the rows' read with two loads
@@ -17,7 +17,8 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
+
+#include "millscope/engine.hpp"  // wide_block_listed, wide_pairs_supported
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define MILLSCOPE_WIDE_PAIRS 1
@@ -27,10 +28,6 @@
 #endif
 
 namespace millscope::engine {
-
-/// The pair pass with the wide search takes blocks of rows holding at most this many listed
-/// pairs (or one row that holds more): about 70 contacts in the pilot mill's charges.
-inline constexpr std::size_t wide_block_listed = 224;
 
 /// Where touching_pairs_wide writes the touching pairs: row i, partner j, list slot, and
 /// x_i - x_j (m), one entry per pair. Each array needs room for 8 entries beyond the last pair
@@ -61,19 +58,6 @@ struct PartnerPrefetch {
   static constexpr std::uint32_t list_ahead = 2048;  // listed pairs
   static constexpr std::uint32_t pair_ahead = 256;   // listed pairs
 };
-
-/// Whether this build and this CPU run touching_pairs_wide. Setting the environment variable
-/// MILLSCOPE_NO_WIDE_PAIRS (to anything but "" or "0") turns it off, so that the portable
-/// search can be run and tested on a CPU that has AVX-512.
-inline bool wide_pairs_supported() {
-#if MILLSCOPE_WIDE_PAIRS
-  const char* off = std::getenv("MILLSCOPE_NO_WIDE_PAIRS");
-  if (off != nullptr && off[0] != '\0' && !(off[0] == '0' && off[1] == '\0')) return false;
-  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-#else
-  return false;
-#endif
-}
 
 #if MILLSCOPE_WIDE_PAIRS
 /// The touching pairs of the Verlet list rows [first_row, end_row) (half list: row i's partners

@@ -1,0 +1,124 @@
+// Stage: the pair pass of the paper's law without the ledger (Engine::Access::Step), each
+// block of rows in three phases: 1. its touching pairs (the wide search where the CPU can,
+// touching_pairs.hpp, else the portable one), 2. their forces in SIMD lanes
+// (contact_forces_in_lanes), 3. the springs back, and the sums.
+#pragma once
+
+#include "step/context.hpp"
+
+namespace millscope::engine {
+
+template <class S>
+void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepPartial& part,
+                                                 std::size_t row_begin, std::size_t own_end,
+                                                 double* const* buffered) {
+  const std::uint32_t* const start = e.list_.start().data();
+  const std::uint32_t* const partner = e.list_.partner().data();
+  double* const history = e.list_.history().data();
+  static_assert(!in_lanes || hs == 3, "the lanes carry the spring d_t, 3 doubles");
+  // 3. The springs back, and the sums: those on j straight into j, those on i into the
+  // block's row sums, added to i last. As in the portable pass, to the bit: i receives from
+  // the rows before it (j > i in a half list), then its own row's sum.
+  auto sum_block = [&](ContactBatch& b, std::size_t block, std::size_t block_end) {
+    double* const row_sum = b.row_sum.data();  // 6 per row of the block
+    std::fill(row_sum, row_sum + 6 * (block_end - block), 0.0);
+    for (std::size_t c = 0; c < b.size; ++c) {
+      const std::size_t i = b.i[c], j = b.j[c];
+      double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
+      hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
+      const double r_min = std::min(r[i], r[j]), overlap = b.overlap[c];
+      if (overlap > max_overlap * r_min) part.note_overlap(i, overlap / r_min, false);
+      const double on_i[6] = {b.fx[c], b.fy[c], b.fz[c], b.tix[c], b.tiy[c], b.tiz[c]};
+      const double on_j[6] = {-b.fx[c], -b.fy[c], -b.fz[c], b.tjx[c], b.tjy[c], b.tjz[c]};
+      double* const sum_i = row_sum + 6 * (i - block);
+      const bool j_own = j < own_end;
+      const std::size_t k = j_own ? j : j - own_end;
+      double* const* const dst = j_own ? own : buffered;
+      for (std::size_t q = 0; q < 6; ++q) {
+        sum_i[q] += on_i[q];
+        dst[q][k] += on_j[q];
+      }
+    }
+    for (std::size_t i = block; i < block_end; ++i)
+      for (std::size_t q = 0; q < 6; ++q) own[q][i] += row_sum[6 * (i - block) + q];
+  };
+  ContactBatch& b = *batches[static_cast<std::size_t>(t)];
+  const materials::PairConstants* const pairs = OneMaterial ? &pc_one : &table(0, 0);
+#if MILLSCOPE_WIDE_PAIRS
+  if (wide) {
+    for (std::size_t block = row_begin; block < own_end;) {
+      // 1. The touching pairs of the rows [block, block_end), which hold at most
+      // wide_block_listed listed pairs (or one row that holds more).
+      const std::size_t row_limit = std::min(own_end, block + ContactBatch::max_rows);
+      std::size_t block_end = block + 1;
+      while (block_end < row_limit && start[block_end + 1] - start[block] <= wide_block_listed)
+        ++block_end;
+      const std::uint32_t s0 = start[block], s1 = start[block_end];
+      b.size = 0;  // reserve_listed counts its room from size
+      b.reserve_listed(s1 - s0);
+      const TouchingPairs out{b.i.data(),  b.j.data(),  b.slot.data(),
+                              b.dx.data(), b.dy.data(), b.dz.data()};
+      auto search = [&](auto with_prefetch) {
+        return touching_pairs_wide<!EndWalls, decltype(with_prefetch)::value>(
+            block, block_end, start, partner, x, y, z, r, n, period, b.slot_row.data(), out,
+            ahead);
+      };
+      b.size = prefetch ? search(std::true_type{}) : search(std::false_type{});
+      for (std::size_t c = 0; c < b.size; ++c) {
+        const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
+        b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
+        b.pair[c] = OneMaterial
+                        ? 0u
+                        : static_cast<std::uint32_t>(table.index(mat[b.i[c]], mat[b.j[c]]));
+      }
+      // A listed pair that does not touch has its history cleared; those that touch get
+      // theirs back in phase 3.
+      std::fill(history + static_cast<std::size_t>(s0) * hs,
+                history + static_cast<std::size_t>(s1) * hs, 0.0);
+      // 2. Their forces, several at a time.
+      contact_forces_in_lanes(b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
+      sum_block(b, block, block_end);
+      block = block_end;
+    }
+    return;
+  }
+#endif
+  for (std::size_t block = row_begin; block < own_end;) {
+    // 1. The touching pairs of the rows [block, block_end); a listed pair that does not
+    // touch has its history cleared.
+    b.size = 0;
+    std::size_t block_end = block;
+    while (block_end < own_end && b.size < ContactBatch::max_contacts &&
+           block_end - block < ContactBatch::max_rows) {
+      const std::size_t i = block_end;
+      const double xi = x[i], yi = y[i], zi = z[i], ri = r[i];
+      b.reserve(start[i + 1] - start[i]);
+      for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
+        const std::size_t j = partner[s];
+        double* const hist = history + static_cast<std::size_t>(s) * hs;
+        const double dx = xi - x[j], dy = yi - y[j];
+        double dz = zi - z[j];
+        if constexpr (!EndWalls) dz -= period * std::nearbyint(dz / period);
+        const double r_sum = ri + r[j];
+        if (!(dx * dx + dy * dy + dz * dz < r_sum * r_sum)) {
+          Law::clear(hist);
+          continue;
+        }
+        const std::size_t c = b.size++;
+        b.i[c] = static_cast<std::uint32_t>(i);
+        b.j[c] = static_cast<std::uint32_t>(j);
+        b.slot[c] = s;
+        b.pair[c] = static_cast<std::uint32_t>(OneMaterial ? 0 : table.index(mat[i], mat[j]));
+        b.dx[c] = dx, b.dy[c] = dy, b.dz[c] = dz;
+        b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
+      }
+      ++block_end;
+    }
+    // 2. Their forces, several at a time.
+    contact_forces_in_lanes(b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
+    sum_block(b, block, block_end);
+    block = block_end;
+  }
+}
+
+}  // namespace millscope::engine

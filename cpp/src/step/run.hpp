@@ -1,0 +1,110 @@
+// The step loop of a kernel (Engine::Access::run): one OpenMP team per call, the stages in
+// order with two barriers per step, and the list's upkeep (rebuild, lifter refresh) between
+// them. Included by the src/engine_law_*.cpp files that instantiate the kernels.
+#pragma once
+
+#include <omp.h>
+
+#include <stdexcept>
+
+#include "step/close.hpp"
+#include "step/context.hpp"
+#include "step/ended_springs.hpp"
+#include "step/kick_drift.hpp"
+#include "step/list_upkeep.hpp"
+#include "step/pair_pass.hpp"
+#include "step/particle_pass.hpp"
+
+namespace millscope::engine {
+
+template <class Law, bool OneMaterial, bool Lifters, bool EndWalls, bool Tally>
+void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
+  using Kernel = Step<Shape<Law, OneMaterial, Lifters, EndWalls, Tally>>;
+  if (e.buffer_width_ != Kernel::width ||
+      (Kernel::dissipates && e.dissipative_.size() != 6 * e.n_))
+    throw std::logic_error("the engine's pair buffers do not fit its step kernel");
+  Kernel step(e, observer);
+  if (e.list_.builds() == 0) rebuild(e);
+  if constexpr (Lifters) e.lifter_angles_.update(e.config_.geometry, e.theta_);
+  step.run(steps);
+  if (!step.error.empty()) throw std::runtime_error(step.error);
+}
+
+// Two barriers per step. A step's particle pass and the next step's kick and drift touch only
+// the thread's own particles, so they need none between them; the step is closed (torque,
+// ledger, observer, guards) after the next step's first barrier, from its set of partials.
+template <class S>
+void Engine::Access::Step<S>::run(long steps) {
+  const long first_step = e.step_;  // the step count when this call began
+#pragma omp parallel num_threads(team)
+  {
+    const int t = omp_get_thread_num();
+    const bool master = t == 0;
+    if constexpr (in_lanes) batches[static_cast<std::size_t>(t)] = std::make_unique<ContactBatch>();
+    bool failed = false;  // the same in every thread
+    if (!e.forces_valid_) {
+      // The forces of the initial state; the tangential history does not advance.
+      StepPartial* const parts = partials_of(-1);
+      parts[t] = StepPartial{};
+      pair_pass(t, 0.0, parts[t]);
+#pragma omp barrier
+      particle_pass(t, 0.0, false, parts[t]);
+#pragma omp barrier
+      failed = close_step(parts, 0.0, master, first_step);
+      if (master && !failed) e.forces_valid_ = true;
+#pragma omp barrier
+    }
+    // Every thread follows the drum angle and the angle of the last lifter refresh itself, so
+    // that the decisions below need no shared write.
+    double theta = e.theta_, reach_theta = e.reach_theta_;
+    for (long s = 0; !failed; ++s) {
+      StepPartial* const parts = partials_of(s);
+      // The state guards look at every guard_interval-th step of the engine's count and at the
+      // last step of the call; rebuild and refresh_walls look before they bin the particles.
+      const bool guarded = (first_step + s + 1) % guard_interval == 0 || s + 1 == steps;
+      if (s < steps) {
+        parts[t] = StepPartial{};
+        if (guarded) {
+          kick_drift<true>(t, parts[t]);
+        } else {
+          kick_drift<false>(t, parts[t]);
+        }
+      }
+#pragma omp barrier
+      // Every particle has drifted and the step before is complete: close it.
+      if (s > 0 && close_step(partials_of(s - 1), dt, master, first_step + s)) break;
+      if (s == steps) break;
+      theta += e.omega_ * dt;
+      if (!list_upkeep(t, parts, guarded, first_step + s + 1, theta, reach_theta)) break;
+      pair_pass(t, dt, parts[t]);
+#pragma omp barrier
+      particle_pass(t, dt, true, parts[t]);
+    }
+  }
+}
+
+/// The kernel of a law for the scene's shape, chosen once per engine.
+template <class Law, bool Tally>
+StepKernel select_shape(bool one_material, bool lifters, bool end_walls) {
+  using A = Engine::Access;
+  if (one_material) {
+    if (lifters)
+      return end_walls ? &A::run<Law, true, true, true, Tally> : &A::run<Law, true, true, false, Tally>;
+    return end_walls ? &A::run<Law, true, false, true, Tally> : &A::run<Law, true, false, false, Tally>;
+  }
+  if (lifters)
+    return end_walls ? &A::run<Law, false, true, true, Tally> : &A::run<Law, false, true, false, Tally>;
+  return end_walls ? &A::run<Law, false, false, true, Tally> : &A::run<Law, false, false, false, Tally>;
+}
+
+/// ... and whether it books the dissipated energy (only a law that dissipates has two).
+template <class Law>
+StepKernel select_kernel(bool one_material, bool lifters, bool end_walls, bool track_energy) {
+  if constexpr (Law::dissipates) {
+    if (track_energy) return select_shape<Law, true>(one_material, lifters, end_walls);
+  }
+  (void)track_energy;
+  return select_shape<Law, false>(one_material, lifters, end_walls);
+}
+
+}  // namespace millscope::engine
