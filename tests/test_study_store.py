@@ -28,6 +28,7 @@ from millscope.campaign.studies import (
     run_study,
     save_study_plan,
 )
+from millscope.model.presets import SCALE_BIAS, pilot_mill
 from millscope.signal.record import TorqueRecord
 
 from .test_studies import SHORT, _fake_runs
@@ -116,14 +117,17 @@ def test_a_partial_study_leaves_out_unfinished_settings_but_not_the_reference() 
 
 
 def _block_means(result: StudyResult, k: int) -> np.ndarray:
-    """Mean torque of each seed's block, by numpy on the stored record."""
+    """Mean torque of each seed's block, by numpy on the stored record, per length of the
+    reference's drum (a slice stands for its share of the mill)."""
     setting = result.plan.settings[k]
     out = []
     for run in sorted((r for r in result.runs if r.setting == k), key=lambda r: r.seed):
         record = TorqueRecord.load(STUDY / "store" / "cases" / f"{run.hash}.npz")
         t, torque = record.time_s, record.torque_Nm
         block = (t >= setting.warm_up_s) & (t < setting.duration_s)
-        out.append(torque[block].mean())
+        length = result.plan.scene(setting, 1).drum.length
+        ref_length = result.plan.scene(result.reference, 1).drum.length
+        out.append(torque[block].mean() * ref_length / length)
     return np.array(out)
 
 
@@ -223,3 +227,30 @@ def test_also_adds_a_setting_with_several_knobs_changed(tmp_path, capsys) -> Non
     reference = Setting(dt_fraction=0.1, record_s=1.0, warm_up_s=0.5)
     settings = [reference.replace(**changes) for changes in parsed.also]
     assert settings[0].label == "dt 0.1 T_R, G x0.001, tiny, 0.5+1 s, instant"
+
+
+# -- what the presets say each scale's bias is -------------------------------------------------
+
+
+@pytest.mark.parametrize("scale", sorted(SCALE_BIAS))
+def test_the_scale_bias_is_what_the_committed_study_measured(scale: str) -> None:
+    """presets.SCALE_BIAS quotes the study rounded: the study read again must round to it."""
+    bias = SCALE_BIAS[scale]
+    own = pilot_mill(0.71, scale=scale)
+    paper = pilot_mill(0.71, scale="paper")
+    factor = (own.material(own.drum.material).shear_modulus
+              / paper.material(paper.drum.material).shear_modulus)
+    result = read_study(STUDY)
+    (row,) = [r for r in result.rows  # the scale's drum and stiffness, the reference's rest
+              if r.length_m == own.drum.length
+              and (r.setting.scale == "paper") == (own.drum.length == paper.drum.length)
+              and r.shear_modulus_ratio == pytest.approx(factor, rel=1e-12)
+              and r.setting.dt_fraction == result.reference.dt_fraction
+              and r.setting.record_s == result.reference.record_s
+              and r.setting.sampling == result.reference.sampling]
+    q = row.quantities
+    assert row.seeds == bias.seeds
+    assert bias.mean_torque == pytest.approx(q["mean_torque"].error, abs=5e-4)
+    assert bias.mean_torque_se == pytest.approx(q["mean_torque"].error_se, abs=5e-4)
+    assert bias.energy == pytest.approx(q["energy"].error, abs=5e-4)
+    assert bias.energy_se == pytest.approx(q["energy"].error_se, abs=5e-4)
