@@ -417,7 +417,9 @@ class Campaign:
         finally:
             if pool is not None:
                 pool.shutdown(wait=True, cancel_futures=True)
-            _write_manifest(self._store, entries, self._analysis)
+            # From the files, not from ``entries``: a Ctrl-C between storing a case and
+            # booking it would otherwise leave the manifest a case behind the store.
+            _write_manifest(self._store, self._entries(_scan(self._store)), self._analysis)
 
     def _store_outcome(self, k: int, outcome: Mapping[str, Any]) -> dict[str, Any]:
         """Writes a worker's outcome for case ``k``; returns its manifest entry."""
