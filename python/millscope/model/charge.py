@@ -25,12 +25,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _checks
-from .scene import Scene
+from .scene import GRAVITY, Scene
 
 __all__ = ["GRAVITY", "ChargeShape", "charge_shape", "particle_masses"]
 
-#: Gravitational acceleration, m/s^2 (docs/physics.md, Bodies).
-GRAVITY = 9.81
 
 #: A bin or cell belongs to the charge when it holds at least this share of the typical mass
 #: of a full one (:data:`FULL_PERCENTILE`).

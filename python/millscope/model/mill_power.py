@@ -27,7 +27,7 @@ import math
 from dataclasses import dataclass
 
 from .. import _checks
-from .charge import GRAVITY
+from .scene import GRAVITY
 
 __all__ = ["MORRELL_K", "MillPower", "critical_speed_rad_s", "hogg_fuerstenau_power",
            "morrell_c_power", "segment_half_angle"]
@@ -167,7 +167,7 @@ def hogg_fuerstenau_power(diameter_m: float, length_m: float, speed_fraction: fl
                            "in (0, pi/2) (the free surface rises towards the rising side)",
                            "rad")
     r = 0.5 * d
-    omega = phi * math.sqrt(2.0 * GRAVITY / d)
+    omega = phi * critical_speed_rad_s(d)
     theta = segment_half_angle(j)
     power = omega * (2.0 / 3.0) * rho * GRAVITY * length * r**3 * math.sin(theta) ** 3 \
         * math.sin(alpha)
@@ -248,7 +248,7 @@ def morrell_c_power(diameter_m: float, length_m: float, speed_fraction: float,
     d, length, phi, j, rho = _mill("morrell_c_power", diameter_m, length_m, speed_fraction,
                                    filling, charge_density_kg_m3)
     r_m = 0.5 * d
-    n_m = phi * math.sqrt(2.0 * GRAVITY / d) / (2.0 * math.pi)  # rev/s
+    n_m = phi * critical_speed_rad_s(d) / (2.0 * math.pi)  # rev/s
     toe, shoulder = morrell_toe_shoulder(phi, j)
     arc = 2.0 * math.pi + shoulder - toe  # the arc of the shell the charge covers
     lift = math.sin(shoulder) - math.sin(toe)

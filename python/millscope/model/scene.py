@@ -50,6 +50,9 @@ __all__ = [
     "SceneError",
 ]
 
+#: Standard gravitational acceleration, m/s^2: a scene's default, and the power models'.
+GRAVITY = 9.81
+
 SCENE_FORMAT = "millscope-scene-1"  # the "format" key of Scene.to_dict
 RANDOM_CLOSE_PACKING = 0.64  # the largest solid fraction a random bed of spheres reaches
 MAX_SPEED_FRACTION = 3.0  # speed_fraction in (0, 3]
@@ -407,7 +410,7 @@ class Scene:
     speed_fraction: float | None = None
     speed_hz: float | None = None
     critical_speed_convention: str = "ball"
-    gravity: float = 9.81
+    gravity: float = GRAVITY
     clamp_normal_force: bool = False
     name: str = ""
     _index: Mapping[str, int] = field(init=False, repr=False, compare=False)
