@@ -177,11 +177,11 @@ def _tabulate(plan: StudyPlan, store: Path, results: list[CaseResult], *,
     """The table of the finished ones of a plan's cases (``results`` of any order); a case
     with a donor (:meth:`StudyPlan.donor`) is cut from the donor's record."""
     by_hash = {r.hash: r for r in results if r.ok}
-    cases = plan.cases()
+    hashes = [c.hash() for c in plan.cases()]
     runs = []
-    for i in range(len(cases)):
+    for i, own in enumerate(hashes):
         donor = plan.donor(i)
-        source = cases[i if donor is None else donor].hash()
+        source = own if donor is None else hashes[donor]
         if source in by_hash:
             runs.append(_run_of(plan, i, by_hash[source]))
     return StudyResult.from_runs(plan, runs, store=store, partial=partial)
