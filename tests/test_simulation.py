@@ -128,7 +128,25 @@ def test_energy_ledger_changes_nothing_in_the_motion(threads: int, particles: st
     e_on, e_off = on.energies(), off.energies()
     assert e_on["drive_work"] == e_off["drive_work"] and e_on["drive_work"] > 0
     assert e_on["dissipated"] > 0
-    assert all(np.isnan(e_off[k]) for k in ("dissipated", "damping_loss", "friction_loss"))
+    for k in ("dissipated", "damping_loss", "friction_loss", "spring_work"):
+        with pytest.raises(ms.LedgerOffError, match=r"track_energy=True"):
+            e_off[k]
+    assert set(e_on) - set(e_off) == {"dissipated", "damping_loss", "friction_loss",
+                                      "spring_work"}
+    assert all(np.isfinite(v) for v in e_off.values())
+
+
+def test_the_energy_ledger_is_off_unless_asked_for() -> None:
+    """The default run pays for the torque alone; a key that is not an energy stays a plain
+    KeyError."""
+    sim = ms.Simulation(ms.presets.pilot_mill(0.71, None, scale="tiny"), seed=0, threads=1)
+    assert sim.track_energy is False
+    e = sim.energies()
+    with pytest.raises(ms.LedgerOffError, match=r"\['dissipated'\] is not booked"):
+        e["dissipated"]
+    with pytest.raises(KeyError) as info:
+        e["no such energy"]
+    assert not isinstance(info.value, ms.LedgerOffError)
 
 
 def test_track_energy_is_kept_by_a_checkpoint(tmp_path) -> None:  # type: ignore[no-untyped-def]

@@ -12,7 +12,7 @@ from .calibration.groups import GroupAnalysis, analyze_campaign
 from .calibration.monitoring import WindowEstimate, monitor
 from .campaign import Campaign, Case, CaseResult, RunSettings, read_store, studies
 from .campaign.studies import StudyPlan, StudyResult, run_study
-from .engine.simulation import CheckpointError, SettleWarning, Simulation
+from .engine.simulation import CheckpointError, LedgerOffError, SettleWarning, Simulation
 from .model import contact, presets
 from .model.scene import Drum, Fraction, Lifters, Material, Pair, Scene
 from .signal import drivetrain
@@ -47,6 +47,7 @@ __all__ = [
     "Case",
     "CaseResult",
     "CheckpointError",
+    "LedgerOffError",
     "Drum",
     "Fraction",
     "Lifters",

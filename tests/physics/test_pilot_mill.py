@@ -23,7 +23,7 @@ STEADY_FROM_S = 1.0  # the charge has found its shape after about 1 s
 @pytest.fixture(scope="module")
 def mill_run():  # type: ignore[no-untyped-def]
     scene = ms.presets.pilot_mill(0.71, None, scale="soft")
-    sim = ms.Simulation(scene, seed=1, threads=min(2, usable_cores()))
+    sim = ms.Simulation(scene, seed=1, threads=min(2, usable_cores()), track_energy=True)
     sim.settle(progress=False)
     sim.run(STEADY_FROM_S, progress=False)
     before = sim.energies()

@@ -169,7 +169,8 @@ def simulation(scene: ms.Scene, settle_s: float, dt_factor: float = 1.0) -> ms.S
     limit = time_step_limit(scene)
     dt = dt_factor * min(DEFAULT_DT_FRACTION * limit.rayleigh_time, limit.dt)
     sim = ms.Simulation(scene, seed=0, dt=dt,
-                        threads=THREADS, settle_min_s=settle_s, settle_max_s=settle_s)
+                        threads=THREADS, settle_min_s=settle_s, settle_max_s=settle_s,
+                        track_energy=True)
     sim.fill()
     return sim
 

@@ -58,8 +58,8 @@ from ..signal.record import TorqueRecord
 from . import checkpoint as _checkpoint
 from .snapshots import ChargeSnapshot, VtkSeries, check_folder
 
-__all__ = ["CheckpointError", "Sampling", "SettleReport", "SettleWarning", "Simulation",
-           "check_threads"]
+__all__ = ["CheckpointError", "Energies", "LedgerOffError", "Sampling", "SettleReport",
+           "SettleWarning", "Simulation", "check_threads"]
 
 #: how a torque sample is taken: the value at its instant, or the mean over its interval
 Sampling = Literal["instant", "mean"]
@@ -98,6 +98,32 @@ class SettleWarning(RuntimeWarning):
 
 class CheckpointError(ValueError):
     """A checkpoint file is damaged, from another version, or not a checkpoint at all."""
+
+
+#: the entries of Simulation.energies() that only the energy ledger books
+LEDGER_ONLY = ("dissipated", "damping_loss", "friction_loss", "spring_work")
+
+
+class LedgerOffError(KeyError):
+    """An energy that only the energy ledger books, asked of a run made without it."""
+
+    def __str__(self) -> str:  # KeyError would show the message in quotes
+        return str(self.args[0])
+
+
+class Energies(dict[str, float]):
+    """What :meth:`Simulation.energies` returns: a dict of J. Without the energy ledger, an
+    entry only the ledger books raises :class:`LedgerOffError`, which says how to book it,
+    instead of a plain ``KeyError``."""
+
+    def __missing__(self, key: str) -> float:
+        if key in LEDGER_ONLY:
+            raise LedgerOffError(
+                f"energies()[{key!r}] is not booked: this Simulation runs without the energy "
+                "ledger; make it with Simulation(..., track_energy=True), or load its "
+                "checkpoint with Simulation.load(path, track_energy=True), to book the losses "
+                "from then on")
+        raise KeyError(key)
 
 
 @dataclass(frozen=True)
@@ -155,16 +181,17 @@ class Simulation:
         Least and most simulated settling time, s.
     track_energy : bool
         Book the energy the dashpots and sliding take out (``energies()["dissipated"]`` and
-        its split). It costs a quarter to a third of the run time (the dissipating forces are
-        summed per particle besides the forces); the forces, the motion and the torque are
-        the same to the bit without it. Off, only the drive's work is booked and the three
-        losses read NaN. Campaigns and the benchmark run without it.
+        its split); default off. It costs a quarter to a half of the run time (the
+        dissipating forces are summed per particle besides the forces, and the widest pair
+        search is not used); the forces, the motion and the torque are the same to the bit
+        without it. Off, only the drive's work is booked, and ``energies()`` refuses the
+        losses with a message that says how to book them.
     """
 
     def __init__(self, scene: Scene, seed: int = 0, dt: float | None = None,
                  threads: int | None = None, *, skin: float | None = None,
                  settle_tolerance: float = 1e-4, settle_min_s: float = 0.2,
-                 settle_max_s: float = 3.0, track_energy: bool = True) -> None:
+                 settle_max_s: float = 3.0, track_energy: bool = False) -> None:
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a millscope Scene, not {type(scene).__name__}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -265,7 +292,7 @@ class Simulation:
         buffers, and the threads' pair buffers (capacities, not sizes)."""
         return float(self._engine.bytes_per_particle)
 
-    def energies(self) -> dict[str, float]:
+    def energies(self) -> Energies:
         """Energies now and work since the start, J.
 
         ``kinetic``, ``potential`` (m g y, y = 0 on the axis), ``elastic`` (stored in contacts),
@@ -279,14 +306,19 @@ class Simulation:
         to velocity Verlet's O(dt^2) error. The split is evaluated with the half-step
         velocities the forces were computed from, a first-order estimate:
         ``damping_loss + friction_loss`` exceeds ``dissipated`` by O(dt / contact time), about
-        4 % at the default step. Without ``track_energy`` the losses and ``spring_work`` are
-        NaN.
+        4 % at the default step.
+
+        A simulation made without ``track_energy`` books none of the losses nor
+        ``spring_work``: the mapping then holds the first four only, and asking it for the
+        others raises :class:`LedgerOffError` (a ``KeyError``) that says how to book them.
         """
         e = self._engine
         out = {"kinetic": e.kinetic_energy(), "potential": e.potential_energy(),
                "elastic": e.elastic_energy()}
         out.update(e.ledger())
-        return {k: float(v) for k, v in out.items()}
+        if self.track_energy:
+            return Energies((k, float(v)) for k, v in out.items())
+        return Energies((k, float(v)) for k, v in out.items() if k not in LEDGER_ONLY)
 
     def snapshot(self) -> ChargeSnapshot:
         """The particles' state now (copies) with the drum's angle and angular velocity; once
