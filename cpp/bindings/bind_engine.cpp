@@ -163,6 +163,10 @@ void register_engine(py::module_& m) {
       .def_property_readonly("size", &en::Engine::size)
       .def_property_readonly("dt", &en::Engine::dt)
       .def_property_readonly("threads", &en::Engine::threads)
+      .def_property("running_threads", &en::Engine::running_threads,
+                    &en::Engine::set_running_threads,
+                    "The threads that run the threads' shares of each step, in [1, threads]; "
+                    "the results are the same to the bit whatever it is")
       .def_property_readonly("variant", [](const en::Engine& e) { return e.variant().describe(); })
       .def_property_readonly("track_energy",
                              [](const en::Engine& e) { return e.variant().track_energy; },

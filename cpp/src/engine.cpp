@@ -178,6 +178,12 @@ bool wide_pairs_supported() {
 #endif
 }
 
+void Engine::set_running_threads(int n) {
+  if (n < 1 || n > threads_)
+    invalid("running_threads", n, "in [1, threads = " + std::to_string(threads_) + "]");
+  running_threads_ = n;
+}
+
 bool Engine::wide_pair_search() const {
   return config_.wide_pair_search && variant_.law == Variant::Law::hertz_mindlin &&
          !variant_.track_energy && wide_pairs_supported();
@@ -222,6 +228,7 @@ Engine::Engine(Config config)
       cache_bytes_(last_level_cache_bytes()),
       dt_(config_.dt),
       threads_(config_.threads),
+      running_threads_(config_.threads),
       pairs_(config_.materials, config_.restitution, config_.friction),
       list_(config_.skin > 0.0 ? config_.skin : default_skin(config_.radius),
             0, config_.geometry.end_walls ? 0.0 : config_.geometry.length) {

@@ -190,6 +190,12 @@ class Engine {
   std::size_t size() const { return n_; }
   double dt() const { return dt_; }
   int threads() const { return threads_; }
+  /// The threads that run the `threads()` shares of each step: all of them, one share each,
+  /// or fewer, each running several shares in turn (on a machine where other work holds the
+  /// cores). The shares, and so every result, are the same to the bit whatever this is.
+  int running_threads() const { return running_threads_; }
+  /// Sets running_threads(), in [1, threads()] (else std::invalid_argument).
+  void set_running_threads(int n);
   const Variant& variant() const { return variant_; }
   /// Doubles of history per contact, of a pair and of a wall slot: the law's
   /// (contact::history_size; 0 without friction).
@@ -320,7 +326,8 @@ class Engine {
   std::size_t n_;
   double cache_bytes_;  // the CPU's last-level cache, bytes (prefetch_partners())
   double dt_;
-  int threads_;
+  int threads_;          // the shares of the work (the results depend on it)
+  int running_threads_;  // the threads that run them (the results do not)
   Variant variant_;
   StepKernel kernel_;
   materials::PairTable pairs_;

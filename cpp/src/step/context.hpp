@@ -108,8 +108,8 @@ struct Engine::Access::Step {
   // Two sets of per-thread partials, by step parity: step s writes set s % 2 while the threads
   // still read set (s - 1) % 2 to close the step before (see run.hpp).
   std::vector<StepPartial> partial;
-  // Each thread makes its own (see run.hpp), so that its arrays come from that thread's
-  // allocator arena and share no cache line with another thread's.
+  // One per share, made by the thread that runs it (see run.hpp), so that its arrays come
+  // from that thread's allocator arena and share no cache line with another thread's.
   std::vector<std::unique_ptr<ContactBatch>> batches;
   std::string error;  // written by the master thread; a run stops when it is set
 
@@ -152,8 +152,8 @@ struct Engine::Access::Step {
   void drum_contacts(std::size_t i, double history_dt, StepPartial& part);  // drum_pass.hpp
   void particle_pass(int t, double history_dt, bool kick, StepPartial& part);  // particle_pass.hpp
   bool close_step(const StepPartial* parts, double ledger_dt, bool master, long step);  // close.hpp
-  bool list_upkeep(int t, const StepPartial* parts, bool guarded, long step, double theta,
-                   double& reach_theta);  // list_upkeep.hpp
+  bool list_upkeep(int w, int workers, const StepPartial* parts, bool guarded, long step,
+                   double theta, double& reach_theta);  // list_upkeep.hpp
 
   // Ledger: a contact that ends drops what its spring held after the step before (spring.hpp).
   static double spring_energy_at(const materials::PairConstants& pc, double r_star,

@@ -7,12 +7,14 @@
 
 namespace millscope::engine {
 
-// theta: the drum's angle after this step; reach_theta: the angle of the last lifter refresh
-// (every thread follows both itself, so that the decisions need no shared write); step: the
-// engine's step count after this step. Returns false when the run must stop (error is set).
+// w: this thread of the `workers` that run the shares (run.hpp); theta: the drum's angle after
+// this step; reach_theta: the angle of the last lifter refresh (every thread follows both
+// itself, so that the decisions need no shared write); step: the engine's step count after
+// this step. Returns false when the run must stop (error is set).
 template <class S>
-bool Engine::Access::Step<S>::list_upkeep(int t, const StepPartial* parts, bool guarded,
-                                          long step, double theta, double& reach_theta) {
+bool Engine::Access::Step<S>::list_upkeep(int w, int workers, const StepPartial* parts,
+                                          bool guarded, long step, double theta,
+                                          double& reach_theta) {
   double move2 = 0.0;
   std::size_t bad = std::numeric_limits<std::size_t>::max();
   for (int b = 0; b < team; ++b) {
@@ -47,18 +49,18 @@ bool Engine::Access::Step<S>::list_upkeep(int t, const StepPartial* parts, bool 
       }
     }
     if (!error.empty()) return false;
-    if (rebuild_now) {  // every thread finds the partners of its block of rows
-      e.list_.find_rows(x, y, z, r, t, team);
+    if (rebuild_now) {  // each share's thread finds the partners of its block of rows
+      for (int t = w; t < team; t += workers) e.list_.find_rows(x, y, z, r, t, team);
 #pragma omp barrier
 #pragma omp single
       e.list_.size_rows();
-      e.list_.place_rows(t, team);
+      for (int t = w; t < team; t += workers) e.list_.place_rows(t, team);
 #pragma omp barrier
 #pragma omp single
       rebuild_end(e);
     }
     reach_theta = theta;
-  } else if (t == 0) {
+  } else if (w == 0) {
     // Read by nobody before the barrier after the pair pass.
     e.theta_ = theta;
     e.step_ = step;

@@ -31,24 +31,41 @@ void Engine::Access::run(Engine& e, long steps, StepObserver* observer) {
 }
 
 // Two barriers per step. A step's particle pass and the next step's kick and drift touch only
-// the thread's own particles, so they need none between them; the step is closed (torque,
+// the share's own particles, so they need none between them; the step is closed (torque,
 // ledger, observer, guards) after the next step's first barrier, from its set of partials.
+//
+// The work is split into `team` shares (the engine's threads); each stage of a share reads
+// and writes only what that share owns until the next barrier, and the partials are summed
+// in share order. The shares are run by e.running_threads_ threads (or fewer, if OpenMP
+// grants fewer), thread w taking shares w, w + W, ...: a thread running several shares runs
+// them in turn, stage by stage, and the results are the same to the bit.
 template <class S>
 void Engine::Access::Step<S>::run(long steps) {
   const long first_step = e.step_;  // the step count when this call began
-#pragma omp parallel num_threads(team)
+#pragma omp parallel num_threads(e.running_threads_)
   {
-    const int t = omp_get_thread_num();
-    const bool master = t == 0;
-    if constexpr (in_lanes) batches[static_cast<std::size_t>(t)] = std::make_unique<ContactBatch>();
+    const int w = omp_get_thread_num();
+    const int workers = omp_get_num_threads();
+    const bool master = w == 0;
+    // Runs a stage for each share of this thread, in share order.
+    const auto each_share = [&](auto&& stage) {
+      for (int t = w; t < team; t += workers) stage(t);
+    };
+    if constexpr (in_lanes) {
+      each_share([&](int t) {
+        batches[static_cast<std::size_t>(t)] = std::make_unique<ContactBatch>();
+      });
+    }
     bool failed = false;  // the same in every thread
     if (!e.forces_valid_) {
       // The forces of the initial state; the tangential history does not advance.
       StepPartial* const parts = partials_of(-1);
-      parts[t] = StepPartial{};
-      pair_pass(t, 0.0, parts[t]);
+      each_share([&](int t) {
+        parts[t] = StepPartial{};
+        pair_pass(t, 0.0, parts[t]);
+      });
 #pragma omp barrier
-      particle_pass(t, 0.0, false, parts[t]);
+      each_share([&](int t) { particle_pass(t, 0.0, false, parts[t]); });
 #pragma omp barrier
       failed = close_step(parts, 0.0, master, first_step);
       if (master && !failed) e.forces_valid_ = true;
@@ -63,22 +80,25 @@ void Engine::Access::Step<S>::run(long steps) {
       // last step of the call; rebuild and refresh_walls look before they bin the particles.
       const bool guarded = (first_step + s + 1) % guard_interval == 0 || s + 1 == steps;
       if (s < steps) {
-        parts[t] = StepPartial{};
-        if (guarded) {
-          kick_drift<true>(t, parts[t]);
-        } else {
-          kick_drift<false>(t, parts[t]);
-        }
+        each_share([&](int t) {
+          parts[t] = StepPartial{};
+          if (guarded) {
+            kick_drift<true>(t, parts[t]);
+          } else {
+            kick_drift<false>(t, parts[t]);
+          }
+        });
       }
 #pragma omp barrier
       // Every particle has drifted and the step before is complete: close it.
       if (s > 0 && close_step(partials_of(s - 1), dt, master, first_step + s)) break;
       if (s == steps) break;
       theta += e.omega_ * dt;
-      if (!list_upkeep(t, parts, guarded, first_step + s + 1, theta, reach_theta)) break;
-      pair_pass(t, dt, parts[t]);
+      if (!list_upkeep(w, workers, parts, guarded, first_step + s + 1, theta, reach_theta))
+        break;
+      each_share([&](int t) { pair_pass(t, dt, parts[t]); });
 #pragma omp barrier
-      particle_pass(t, dt, true, parts[t]);
+      each_share([&](int t) { particle_pass(t, dt, true, parts[t]); });
     }
   }
 }

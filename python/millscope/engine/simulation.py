@@ -39,13 +39,15 @@ import math
 import os
 import signal
 import threading
+import time
 import warnings
 import zipfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import partial
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -56,6 +58,7 @@ from ..model.scene import Scene
 from ..model.stiffness import time_step_limit, upper_impact_speed
 from ..signal.record import TorqueRecord
 from . import checkpoint as _checkpoint
+from .running_threads import RunningThreads
 from .snapshots import ChargeSnapshot, VtkSeries, check_folder
 
 __all__ = ["CheckpointError", "Energies", "LedgerOffError", "Sampling", "SettleReport",
@@ -63,6 +66,8 @@ __all__ = ["CheckpointError", "Energies", "LedgerOffError", "Sampling", "SettleR
 
 #: how a torque sample is taken: the value at its instant, or the mean over its interval
 Sampling = Literal["instant", "mean"]
+
+_T = TypeVar("_T")
 
 CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"; 3: "order"
 _FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
@@ -171,8 +176,9 @@ class Simulation:
         fractions and the mode that set it.
     threads : int, optional
         OpenMP threads of the engine, in [1, the cores this process may use] (else
-        ``ValueError``, see :func:`check_threads`); default: all those cores. Runs are
-        reproducible bit for bit at a given thread count.
+        ``ValueError``, see :func:`check_threads`); default: all those cores. The work of
+        each step is split into this many shares, and runs are reproducible bit for bit at a
+        given thread count.
     skin : float, optional
         Verlet-list skin, m; default 0.4 x the smallest particle radius.
     settle_tolerance : float
@@ -186,12 +192,19 @@ class Simulation:
         search is not used); the forces, the motion and the torque are the same to the bit
         without it. Off, only the drive's work is booked, and ``energies()`` refuses the
         losses with a message that says how to book them.
+    adapt_threads : bool
+        Time the engine's calls and run the threads' shares on one thread, in turn, while
+        that steps faster than the whole team (when other programs hold some of the cores,
+        threads that wait for each other twice a step can be several times slower than one);
+        the results are the same to the bit (see :mod:`millscope.engine.running_threads`).
+        Default on; benchmarks of the thread count turn it off. Also a settable attribute.
     """
 
     def __init__(self, scene: Scene, seed: int = 0, dt: float | None = None,
                  threads: int | None = None, *, skin: float | None = None,
                  settle_tolerance: float = 1e-4, settle_min_s: float = 0.2,
-                 settle_max_s: float = 3.0, track_energy: bool = False) -> None:
+                 settle_max_s: float = 3.0, track_energy: bool = False,
+                 adapt_threads: bool = True) -> None:
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a millscope Scene, not {type(scene).__name__}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -208,6 +221,9 @@ class Simulation:
         if not isinstance(track_energy, (bool, np.bool_)):
             raise ValueError(f"track_energy = {track_energy!r} is not valid; it must be True or "
                              "False")
+        if not isinstance(adapt_threads, (bool, np.bool_)):
+            raise ValueError(f"adapt_threads = {adapt_threads!r} is not valid; it must be True "
+                             "or False")
         if settle_max_s < settle_min_s:
             raise ValueError(f"settle_max_s = {settle_max_s} s is not valid; it must be >= "
                              f"settle_min_s = {settle_min_s} s")
@@ -217,6 +233,8 @@ class Simulation:
         self._rng = np.random.default_rng(self._seed)
         self._settle = (float(settle_tolerance), float(settle_min_s), float(settle_max_s))
         self._engine = _make_engine(scene, float(dt), int(threads), skin, bool(track_energy))
+        self._running = RunningThreads(int(threads))
+        self.adapt_threads = bool(adapt_threads)
         self._phase: Phase = "empty"
         self.settle_report: SettleReport | None = None
         #: Torque of the drum's parts over the last run, N m: "shell", "lifters", "ends".
@@ -245,7 +263,36 @@ class Simulation:
 
     @property
     def threads(self) -> int:
+        """The engine's threads: the shares each step's work is split into."""
         return int(self._engine.threads)
+
+    @property
+    def running_threads(self) -> int:
+        """The threads that ran the shares in the last call into the engine (see
+        ``adapt_threads``)."""
+        return int(self._engine.running_threads)
+
+    def _advance(self, steps: int) -> None:
+        """``steps`` steps, in one call or more (a probe of the running threads takes fewer
+        steps; the engine's steps are the same however they are split into calls)."""
+        e = self._engine
+        end = e.step_count + steps
+        while e.step_count < end:
+            self._call(int(end - e.step_count), e.advance)
+
+    def _call(self, max_steps: int, call: Callable[..., _T], *args: Any) -> _T:
+        """One call into the engine, ``call(steps, *args)`` with ``steps`` <= ``max_steps``,
+        on the running threads that step faster now when ``adapt_threads`` is set (else on
+        all of them), timed for the next choice."""
+        e = self._engine
+        running, limit = (self._running.plan(max_steps) if self.adapt_threads
+                          else (self.threads, max_steps))
+        e.running_threads = running
+        steps, t0 = e.step_count, time.perf_counter()
+        out = call(limit, *args)
+        if self.adapt_threads:
+            self._running.record(running, int(e.step_count - steps), time.perf_counter() - t0)
+        return out
 
     @property
     def phase(self) -> Phase:
@@ -382,7 +429,7 @@ class Simulation:
         elapsed, ratio = 0.0, math.inf
         with _progress(progress, t_max, "settling", "s") as bar:
             while True:
-                e.advance(chunk)
+                self._advance(chunk)
                 elapsed += chunk * self.dt
                 ratio = self._rest_measure()
                 bar.update(chunk * self.dt)
@@ -492,8 +539,8 @@ class Simulation:
                     # first, to learn where the run starts).
                     want = min(want, 1 if last_index is None else every - last_index % every)
                 # Calls of at most max_steps steps, each going on with the sample under way.
-                out = np.asarray(e.advance_sampled(sample_dt, sampling == "mean", want,
-                                                   max_steps, bool(rows)))
+                sampled = partial(e.advance_sampled, sample_dt, sampling == "mean", want)
+                out = np.asarray(self._call(max_steps, sampled, bool(rows)))
                 rows.append(out)
                 taken += len(out)
                 bar.update(self.time - before)
