@@ -274,11 +274,11 @@ def test_b_dask_cluster_gives_the_same_torque_as_local_processes(tmp_path: Path)
 
 
 def unfillable() -> ms.Scene:
-    """Passes the Scene's check (solid volume < 0.64 x free volume) but not the filling
-    lattice (one layer of 751 sites in the 0.05 m slice): fails inside the worker."""
+    """Passes the Scene's check (solid volume < 0.64 x free volume: up to 2341 balls) but not
+    the filling lattice (1707 sites in the 0.05 m slice): fails inside the worker."""
     scene = tiny()
     (balls,) = scene.charge
-    return scene.replace(charge=(dataclasses.replace(balls, count=1000),), name="too-many")
+    return scene.replace(charge=(dataclasses.replace(balls, count=2000),), name="too-many")
 
 
 def test_c_a_failing_case_is_recorded_and_the_others_finish(tmp_path: Path) -> None:
@@ -289,7 +289,7 @@ def test_c_a_failing_case_is_recorded_and_the_others_finish(tmp_path: Path) -> N
     assert good.status == "done" and good.ok and good.record is not None
     assert bad.status == "failed" and not bad.ok and bad.record is None
     assert bad.error is not None and bad.error.startswith("ValueError: the charge does not fit")
-    assert bad.traceback is not None and "_fill_positions" in bad.traceback
+    assert bad.traceback is not None and "fill_positions" in bad.traceback
     assert np.isnan(bad.energy)
     failure = store / "cases" / f"{bad.hash}.failed.json"
     info = json.loads(failure.read_text())

@@ -423,24 +423,20 @@ def test_the_errors_are_the_numpy_statistics_of_the_stored_records(tiny_study) -
 
 def test_a_shorter_warm_up_costs_less_and_errs_more(tiny_study) -> None:
     """Cost falls along the ladder (particle-steps of rotation; not timed) and the error
-    grows beyond the seed noise. The LTH builds up over the first second of rotation: its
-    amplitude errs more at 0 s of warm-up than at 0.5 s, by more than 2 standard errors of
-    their difference; the mean torque is still in the start-up transient at both, each
-    off the reference by more than 2 standard errors."""
+    grows beyond the seed noise: the mean torque is still in the start-up transient at 0 s
+    and at 0.5 s of warm-up, each off the reference by more than 2 standard errors. (From
+    the close-packed fill the LTH amplitude of a 1 s block is within the seed noise of the
+    reference already in the first second; from the earlier loose fill it built up over
+    that second.)"""
     rows = {r.setting.warm_up_s: r for r in tiny_study.rows}
     planned = [TINY_PLAN.planned_particle_steps(TINY_REF.replace(warm_up_s=w))
                for w in WARM_LADDER]
     assert planned[0] > planned[1] > planned[2]
     ref, mid, cheap = (rows[w].quantities for w in WARM_LADDER)
-    lth_mid, lth_cheap = mid["lth_amplitude"], cheap["lth_amplitude"]
-    # both errors are against the same reference mean: their difference is that of the two
-    # settings' seed means, whose noise is the two spreads over sqrt(seeds)
-    noise = math.sqrt((lth_mid.spread**2 + lth_cheap.spread**2) / 2)
-    assert abs(lth_cheap.error) - abs(lth_mid.error) > 2.0 * noise, (lth_mid, lth_cheap)
     for q in ("mean_torque", "lth_amplitude"):
         assert ref[q].error == 0.0
-        for e in (mid[q], cheap[q]):
-            assert abs(e.error) > 2.0 * e.error_se, (q, e)
+    for e in (mid["mean_torque"], cheap["mean_torque"]):
+        assert abs(e.error) > 2.0 * e.error_se, e
 
 
 def test_the_command_line_reuses_the_store_and_writes_the_table(tiny_study, capsys) -> None:

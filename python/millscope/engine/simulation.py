@@ -13,10 +13,12 @@ Life of a simulation::
     sim.run(1.0, snapshot_every=5, snapshot_dir="vtk")  # with VTK snapshots for ParaView
     sim.save("case.ckpt"); sim = Simulation.load("case.ckpt")
 
-* **Filling** (:meth:`Simulation.fill`): every fraction, largest first, goes onto a loose cubic
-  lattice of its own (pitch 1.05 d, jittered) clear of the shell, the lifters and the end walls,
-  and of the particles already placed; a fraction takes random sites among the lowest ones, so
-  the bed is mixed and starts near the bottom. Reproducible from ``seed``.
+* **Filling** (:meth:`Simulation.fill`, :mod:`millscope.engine.filling`): every fraction,
+  largest first, goes onto a hexagonal close-packed lattice of its own (pitch 1.05 d,
+  jittered; solid fraction 0.64, about that of the settled bed) clear of the shell, the
+  lifters and the end walls, and of the particles already placed; a fraction takes random
+  sites among the lowest ones, so the bed is mixed and starts in the lower segment at about
+  the height it settles to. Reproducible from ``seed``.
 * **Settling** (:meth:`Simulation.settle`): the drum at rest until 99 % of the particles have a
   kinetic energy below ``settle_tolerance`` x m g d (after at least ``settle_min_s``);
   if that takes longer than ``settle_max_s``, a :class:`SettleWarning` says so and it goes on.
@@ -58,6 +60,7 @@ from ..model.scene import Scene
 from ..model.stiffness import time_step_limit, upper_impact_speed
 from ..signal.record import TorqueRecord
 from . import checkpoint as _checkpoint
+from .filling import FILLING, fill_positions
 from .running_threads import RunningThreads
 from .snapshots import ChargeSnapshot, VtkSeries, check_folder
 
@@ -70,9 +73,6 @@ Sampling = Literal["instant", "mean"]
 _T = TypeVar("_T")
 
 CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"; 3: "order"
-_FILL_PITCH = 1.05  # lattice pitch of the filling, in diameters of the fraction
-_FILL_JITTER = 0.02  # random offset of a site, in diameters, each axis
-_WALL_GAP = 0.05  # clearance of a placed particle from the drum, in its diameters
 #: Guards (docs/physics.md, Guards): a run stops with a message naming the step, the particle and
 #: its values when a particle moves faster than SPEED_BOUND_FACTOR x the fastest impact of the
 #: scene (:func:`millscope.stiffness.upper_impact_speed`, omega R + sqrt(2 g D): a particle
@@ -411,7 +411,7 @@ class Simulation:
         """Places every particle without overlap inside the drum (reproducible from the seed)."""
         if self._phase != "empty":
             raise RuntimeError(f"fill() is for an empty drum; this simulation is {self._phase}")
-        self._engine.positions = _fill_positions(self._scene, self._rng)
+        self._engine.positions = fill_positions(self._scene, self._rng)
         self._phase = "filled"
 
     def settle(self, *, progress: bool = True) -> SettleReport:
@@ -598,6 +598,7 @@ class Simulation:
             "sampling": sampling,
             "sample_dt": sample_dt,
             "engine": self.variant,
+            "filling": FILLING,
             "interrupted": interrupted,
         }
 
@@ -810,63 +811,6 @@ def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
                         track_energy=track_energy,
                         max_speed=SPEED_BOUND_FACTOR * upper_impact_speed(scene),
                         max_overlap=MAX_OVERLAP_FRACTION)
-
-
-def _fill_positions(scene: Scene, rng: np.random.Generator) -> NDArray[np.float64]:
-    """Lattice filling, largest fraction first (see the module docstring)."""
-    from scipy.spatial import cKDTree
-
-    drum = scene.drum
-    radius_max = float(np.max(scene.particle_radii()))
-    lifter_height = 0.0 if drum.lifters is None else drum.lifters.height
-    placed: list[NDArray[np.float64]] = []
-    placed_radius: list[NDArray[np.float64]] = []
-    total_volume = scene.charge_volume()
-    order = sorted(range(len(scene.charge)), key=lambda k: -scene.charge[k].diameter)
-    out = [np.empty((0, 3))] * len(scene.charge)
-    for rank, k in enumerate(order):
-        frac = scene.charge[k]
-        d, r = frac.diameter, frac.diameter / 2.0
-        pitch = _FILL_PITCH * d
-        reach = drum.radius - lifter_height - r - _WALL_GAP * d
-        axis = np.arange(-reach, reach + 1e-12, pitch)
-        if drum.end_walls:
-            zs = np.arange(r + _WALL_GAP * d, drum.length - r - _WALL_GAP * d + 1e-12, pitch)
-        else:
-            n_z = max(1, int(drum.length // pitch))
-            zs = (np.arange(n_z) + 0.5) * (drum.length / n_z)
-        gx, gy, gz = np.meshgrid(axis, axis, zs, indexing="ij")
-        sites = np.column_stack([gx.ravel(), gy.ravel(), gz.ravel()])
-        sites += rng.uniform(-_FILL_JITTER * d, _FILL_JITTER * d, sites.shape)
-        sites = sites[np.hypot(sites[:, 0], sites[:, 1]) <= reach]
-        if not drum.end_walls:
-            sites[:, 2] %= drum.length
-        if placed:
-            centres = np.concatenate(placed)
-            radii = np.concatenate(placed_radius)
-            tree = cKDTree(centres, boxsize=None)
-            near = tree.query_ball_point(sites, r + radius_max + _WALL_GAP * d)
-            keep = np.ones(len(sites), dtype=bool)
-            for s, idx in enumerate(near):
-                if idx:
-                    gap = np.linalg.norm(centres[idx] - sites[s], axis=1) - radii[idx] - r
-                    keep[s] = bool(np.all(gap > _WALL_GAP * d))
-            sites = sites[keep]
-        if len(sites) < frac.count:
-            raise ValueError(
-                f"the charge does not fit: fraction {frac.name or frac.material!r} needs "
-                f"{frac.count} places but the filling lattice has {len(sites)} left; the "
-                "charge is too large for this drum")
-        # Random sites among the lowest ones: the largest fraction spreads over the height
-        # the whole charge will take, the later ones fill what is left from the bottom up.
-        spread = total_volume / (frac.count * math.pi * d**3 / 6.0) if rank == 0 else 1.0
-        lowest = np.argsort(sites[:, 1], kind="stable")
-        pool = lowest[: min(len(sites), max(frac.count, int(math.ceil(frac.count * spread))))]
-        chosen = sites[rng.choice(pool, size=frac.count, replace=False)]
-        out[k] = chosen
-        placed.append(chosen)
-        placed_radius.append(np.full(frac.count, r))
-    return np.concatenate(out)
 
 
 @contextmanager
