@@ -22,9 +22,10 @@ class RunningThreads:
     """Chooses, call by call, whether the engine's shares run on all its threads or on one.
 
     It starts on one thread (a wrong start then costs a fraction of ``first_wait_s``, where
-    the team on a busy machine could take several times longer for its first call) and runs
-    the current setting, with now and then a short call of the other setting (a probe, of
-    about ``probe_s`` s at the current rate). Two probes in a row faster than the median of
+    the team on a busy machine could take several times longer for its first call), in calls
+    as short as probes until the first probe has been decided, and runs the current setting,
+    with now and then a short call of the other setting (a probe, of about ``probe_s`` s at
+    the current rate). Two probes in a row faster than the median of
     the current setting's recent calls by more than ``margin`` make the other setting the
     current one (one lucky probe does not). A probe that loses doubles the wait before the
     next, up to ``max_wait_s``, and the wait is at least ``probe_share`` times the probe's own
@@ -53,10 +54,10 @@ class RunningThreads:
         The least wait after a lost probe, in units of the probe's wall time, >= 1.
     """
 
-    #: the fewest steps of a probe
+    #: the fewest steps of a probe, and the steps of the first call
     MIN_PROBE_STEPS = 20
 
-    def __init__(self, threads: int, *, first_wait_s: float = 0.3, max_wait_s: float = 256.0,
+    def __init__(self, threads: int, *, first_wait_s: float = 0.1, max_wait_s: float = 256.0,
                  probe_s: float = 0.05, margin: float = 0.05, drop: float = 0.3,
                  recent: int = 5, probe_share: float = 20.0) -> None:
         if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
@@ -99,11 +100,16 @@ class RunningThreads:
     def plan(self, max_steps: int) -> tuple[int, int]:
         """The running threads and the most steps for the next call, which may take up to
         ``max_steps`` (>= 1) steps."""
-        if self.threads == 1 or not self._rates:
+        if self.threads == 1:
             return self.current, max_steps
+        if not self._rates:
+            return self.current, min(max_steps, self.MIN_PROBE_STEPS)
+        probe_steps = max(1, min(max_steps, max(self.MIN_PROBE_STEPS,
+                                                int(self._median() * self._probe_s))))
         if self._probe_due or self._won or self._since_probe_s >= self._wait_s:
-            steps = int(self._median() * self._probe_s)
-            return self.other, max(1, min(max_steps, max(self.MIN_PROBE_STEPS, steps)))
+            return self.other, probe_steps
+        if self.probes == 0:  # nothing decided yet: no long call on a setting that may be slow
+            return self.current, probe_steps
         return self.current, max_steps
 
     def record(self, running: int, steps: int, wall_s: float) -> None:
