@@ -23,6 +23,54 @@ HWY_BEFORE_NAMESPACE();
 namespace millscope::engine::HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
+/// Whether this target packs the lanes a mask selects with one instruction (AVX-512's and
+/// SVE's compress). Elsewhere (AVX2, NEON) Highway 1.0's CompressStore permutes by a table
+/// that it copies onto the stack at every call (a local constexpr array), which cost more than
+/// the rest of the search on AVX2; there the search permutes by a table of its own, in
+/// read-only memory: PackTable.
+inline constexpr bool native_compress =
+    (HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3) ||
+    (HWY_TARGET & (HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128)) != 0;
+
+/// For N lanes and each mask `bits` of them: the lanes in the order that packs those set in
+/// `bits` first, in lane order (then the others), for TableLookupLanes on doubles (64-bit
+/// indices) and on 32-bit lanes.
+template <std::size_t N>
+struct PackTable {
+  std::int64_t lane64[1u << N][N] = {};
+  std::int32_t lane32[1u << N][N] = {};
+  constexpr PackTable() {
+    for (std::size_t bits = 0; bits < (1u << N); ++bits) {
+      std::size_t k = 0;
+      for (int set = 1; set >= 0; --set)
+        for (std::size_t lane = 0; lane < N; ++lane)
+          if (((bits >> lane) & 1u) == static_cast<std::size_t>(set)) {
+            lane64[bits][k] = static_cast<std::int64_t>(lane);
+            lane32[bits][k++] = static_cast<std::int32_t>(lane);
+          }
+    }
+  }
+};
+template <std::size_t N>
+inline constexpr PackTable<N> pack_table{};
+
+/// Stores at `p` the lanes of v that `bits` (a mask of at most 8 lanes, StoreMaskBits) selects,
+/// packed in lane order; may write the whole vector. v has N lanes of 32 or 64 bits.
+template <class D>
+HWY_INLINE void pack_store(D d, hn::Vec<D> v, std::uint8_t bits, hn::TFromD<D>* p) {
+  constexpr std::size_t N = hn::MaxLanes(D());
+  static_assert(N <= 8, "a mask of at most 8 lanes");
+  if constexpr (sizeof(hn::TFromD<D>) == 8) {
+    const hn::RebindToSigned<D> di;
+    const auto idx = hn::IndicesFromVec(d, hn::LoadU(di, pack_table<N>.lane64[bits]));
+    hn::StoreU(hn::TableLookupLanes(v, idx), d, p);
+  } else {
+    const hn::RebindToSigned<D> di;
+    const auto idx = hn::IndicesFromVec(d, hn::LoadU(di, pack_table<N>.lane32[bits]));
+    hn::StoreU(hn::TableLookupLanes(v, idx), d, p);
+  }
+}
+
 /// The wide search (touching_pairs.hpp, TouchingPairsSearch), N = Lanes(d) listed pairs at a
 /// time.
 template <bool Periodic, bool Prefetch>
@@ -120,12 +168,22 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
     std::uint8_t bits[(max_search_lanes + 7) / 8];
     hn::StoreMaskBits(d, touch, bits);
     const auto slots = hn::Add(hn::Set(du, s0 + s), lane);
-    hn::CompressBitsStore(rows, bits, du, out.i + size);
-    hn::CompressBitsStore(j, bits, du, out.j + size);
-    hn::CompressBitsStore(slots, bits, du, out.slot + size);
-    hn::CompressStore(dx, touch, d, out.dx + size);
-    hn::CompressStore(dy, touch, d, out.dy + size);
-    size += hn::CompressStore(dz, touch, d, out.dz + size);
+    if constexpr (native_compress) {
+      hn::CompressBitsStore(rows, bits, du, out.i + size);
+      hn::CompressBitsStore(j, bits, du, out.j + size);
+      hn::CompressBitsStore(slots, bits, du, out.slot + size);
+      hn::CompressStore(dx, touch, d, out.dx + size);
+      hn::CompressStore(dy, touch, d, out.dy + size);
+      hn::CompressStore(dz, touch, d, out.dz + size);
+    } else {
+      pack_store(du, rows, bits[0], out.i + size);
+      pack_store(du, j, bits[0], out.j + size);
+      pack_store(du, slots, bits[0], out.slot + size);
+      pack_store(d, dx, bits[0], out.dx + size);
+      pack_store(d, dy, bits[0], out.dy + size);
+      pack_store(d, dz, bits[0], out.dz + size);
+    }
+    size += hn::CountTrue(d, touch);
   }
   return size;
 }
