@@ -70,3 +70,15 @@ def test_a_wide_path_runs_as_the_portable_one_to_the_bit(
     assert np.array_equal(torque, reference)
     for field in ("positions", "velocities", "spins"):
         assert np.array_equal(getattr(sim, field), getattr(portable, field)), field
+
+
+def test_a_path_the_cpu_lacks_is_refused_as_such_not_as_a_bad_checkpoint(
+        settled: dict[str, Path], monkeypatch: pytest.MonkeyPatch) -> None:
+    """MILLSCOPE_SIMD naming no path of this CPU: a ValueError that names the variable, from
+    Simulation and from Simulation.load alike (not a CheckpointError: the file is fine)."""
+    monkeypatch.setenv("MILLSCOPE_SIMD", "mmx")
+    with pytest.raises(ValueError, match="MILLSCOPE_SIMD = 'mmx'") as raised:
+        ms.Simulation.load(settled["balls periodic"], threads=1)
+    assert not isinstance(raised.value, ms.CheckpointError)
+    with pytest.raises(ValueError, match="MILLSCOPE_SIMD = 'mmx'"):
+        ms.Simulation(SCENES["balls periodic"], threads=1)

@@ -3,8 +3,9 @@
 // -inl headers define them in that target's namespace: the engine's pair search and contact
 // loop, chosen per engine (lane_kernels.hpp), and the list build's squared test
 // (neighbors::near_in_lanes), always in the widest lanes. Which targets: those that pay.
-// - AVX-512 (Highway's AVX3) and AVX2: the wide search tests 8 or 4 listed pairs at once, and
-//   the contact loop computes 8 or 4 contacts in one instruction.
+// - AVX-512 (Highway's AVX3) and AVX2: the wide search tests 8 or 4 listed pairs at once; the
+//   contact loop computes 4 contacts in one instruction (AVX-512 takes the AVX2 build:
+//   step/contact_lanes-inl.hpp).
 // - The baseline build (x86-64: SSE2, Highway's static target): the contact loop's lanes for
 //   the portable path (two contacts at once).
 // - SSSE3 and SSE4 are left out: two doubles a vector are what the baseline already has for the
@@ -41,7 +42,7 @@ namespace millscope::engine::HWY_NAMESPACE {
 /// the baseline has no vectors Highway uses) get no wide search: the portable one is faster.
 LaneKernels kernels_of_target() {
   LaneKernels k;
-  k.contact_forces = &contact_forces_in_lanes;
+  k.contact_forces = contact_loop;  // null: the next narrower path's (make_paths)
 #if !(HWY_TARGET & (HWY_EMU128 | HWY_SCALAR))
   k.path.pair_lanes = hwy::HWY_NAMESPACE::Lanes(hwy::HWY_NAMESPACE::ScalableTag<double>());
   const WideSearches wide;
@@ -71,7 +72,8 @@ std::string path_name(std::int64_t target) {
 
 /// Every path this build runs on this CPU, widest first, "portable" last. Each target's
 /// kernels are taken from Highway's table (HWY_EXPORT) at the index its dispatch would use for
-/// that target alone (a ChosenTarget of our own: Highway's process-wide one is left alone).
+/// that target alone (a ChosenTarget of our own: Highway's process-wide one is left alone). A
+/// target without its own contact loop takes the next narrower path's.
 std::vector<LaneKernels> make_paths() {
   std::vector<LaneKernels> paths;
   for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) {
@@ -86,6 +88,8 @@ std::vector<LaneKernels> make_paths() {
   portable.path = SimdPath{"portable", 1};
   for (auto& row : portable.touching_pairs) row[0] = row[1] = nullptr;
   paths.push_back(portable);
+  for (std::size_t p = paths.size() - 1; p-- > 0;)
+    if (paths[p].contact_forces == nullptr) paths[p].contact_forces = paths[p + 1].contact_forces;
   return paths;
 }
 

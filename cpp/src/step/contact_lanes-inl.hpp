@@ -22,6 +22,16 @@
 HWY_BEFORE_NAMESPACE();
 namespace millscope::engine::HWY_NAMESPACE {
 
+// AVX-512 has no build of its own: with 8 contacts to a vector the loop's indexed loads (no
+// gathers under generic tuning) and the rest of each block of about 70 contacts weigh more,
+// and AVX-512 lanes did not beat AVX2 lanes in the engine (docs/performance.md, SIMD paths);
+// the AVX-512 path takes the AVX2 build (lane_kernels.cpp), as the engine did before it
+// dispatched through Highway, and the build is spared a target.
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+/// This target's build of the loop: none.
+inline constexpr ContactForcesInLanes contact_loop = nullptr;
+#else
+
 /// The paper's law (contact::HertzMindlin: Hertz (1), viscous damping (2), Mindlin no-slip
 /// spring (5)-(7) with the Coulomb limit (8), unclamped) for every contact of a block, written
 /// branch-free so that the compiler computes several contacts in the lanes of one instruction
@@ -100,6 +110,10 @@ void contact_forces_in_lanes(
     tjxs[c] = -rj * cx, tjys[c] = -rj * cy, tjzs[c] = -rj * cz;  // (r_j n) x (-F_t)
   }
 }
+
+/// This target's build of the loop.
+inline constexpr ContactForcesInLanes contact_loop = &contact_forces_in_lanes;
+#endif  // a build of the loop
 
 }  // namespace millscope::engine::HWY_NAMESPACE
 HWY_AFTER_NAMESPACE();
