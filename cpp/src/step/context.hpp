@@ -71,7 +71,7 @@ struct Engine::Access::Step {
   static constexpr bool dissipates = Law::dissipates && Tally;
   static constexpr std::size_t width = buffer_width(dissipates);  // per-thread buffer, x n doubles
   // The paper's law without the ledger computes its pair contacts in SIMD lanes
-  // (contact_forces_in_lanes); the ledger's kernels and the other laws take pair_force.
+  // (contact_lanes.hpp); the ledger's kernels and the other laws take pair_force.
   static constexpr bool in_lanes = std::is_same_v<Law, contact::HertzMindlin> && !Tally;
   static_assert(hs == Law::tangential_part::history_size,
                 "the pair history is the tangential spring alone, odd under swapping the pair "
