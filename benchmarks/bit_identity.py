@@ -14,8 +14,9 @@ at the "tiny" scale, each with lifters and periodic ends and with end walls and 
 on 1 and 2 threads, with and without the energy ledger (``track_energy``), from the filled
 (unsettled) state; then impacts of the contact probe and single evaluations of the law
 (``_core.contact_probe``, ``_core.sphere_contact``, ``_core.wall_contact``) over friction,
-restitution and the normal clamp. Set MILLSCOPE_NO_WIDE_PAIRS=1 to run the portable pair
-search where the CPU has AVX-512.
+restitution and the normal clamp. Set MILLSCOPE_SIMD to run another SIMD path of the engine's
+vector kernels than the widest (``python -m millscope info`` lists them, e.g. ``portable``);
+every path must print the same.
 """
 
 from __future__ import annotations

@@ -24,6 +24,7 @@ with the given thread count and times ``--steps`` steps with :func:`millscope.be
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import subprocess
 import sys
@@ -73,10 +74,13 @@ def _checkpoint(text: str) -> Path:
     return path
 
 
-def time_run(build: Path, checkpoint: Path, threads: int, steps: int) -> float:
-    """Particle-steps per second of one run of ``build`` from ``checkpoint``."""
+def time_run(build: Path, checkpoint: Path, threads: int, steps: int,
+             env: dict[str, str] | None = None) -> float:
+    """Particle-steps per second of one run of ``build`` from ``checkpoint``, with ``env`` added
+    to this process's environment (for instance MILLSCOPE_SIMD)."""
     out = subprocess.run([sys.executable, "-c", _RUN, str(build), str(checkpoint), str(threads),
-                          str(steps)], capture_output=True, text=True)
+                          str(steps)], capture_output=True, text=True,
+                         env=None if env is None else {**os.environ, **env})
     if out.returncode != 0:
         raise RuntimeError(f"the run of the build in {build} failed:\n{out.stderr.strip()}")
     return float(out.stdout.strip().splitlines()[-1])

@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 extras=""
 [ "${1:-}" = "--test" ] && extras="[test]"
 
-system_packages=(g++ cmake pkg-config libeigen3-dev libfftw3-dev)
+system_packages=(g++ cmake pkg-config libeigen3-dev libfftw3-dev libhwy-dev)
 missing=()
 for p in "${system_packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

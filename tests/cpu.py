@@ -4,6 +4,7 @@ and how many cores this process may use."""
 from __future__ import annotations
 
 import os
+import platform
 
 import pytest
 
@@ -18,11 +19,20 @@ def cpu_flags() -> set[str]:
         return set()
 
 
-def runs_wide_pair_search() -> bool:
-    """Whether the engine's AVX-512 pair search (touching_pairs.hpp) runs here: the CPU has it
-    and MILLSCOPE_NO_WIDE_PAIRS does not turn it off."""
-    turned_off = os.environ.get("MILLSCOPE_NO_WIDE_PAIRS", "") not in ("", "0")
-    return {"avx512f", "avx512vl"} <= cpu_flags() and not turned_off
+#: The CPU features each x86-64 SIMD path of the engine needs (Google Highway's targets AVX3 and
+#: AVX2 as it detects them), as /proc/cpuinfo names them.
+SIMD_PATH_FLAGS = {"avx512": {"avx512f", "avx512vl", "avx512dq", "avx512bw", "avx2", "fma",
+                              "bmi1", "bmi2", "f16c"},
+                   "avx2": {"avx2", "fma", "bmi1", "bmi2", "f16c"}}
+
+
+def x86_simd_paths() -> list[str] | None:
+    """The engine's SIMD paths this CPU should run, widest first, "portable" last, read from
+    /proc/cpuinfo independently of the build; None off x86-64 or where it cannot be read."""
+    flags = cpu_flags()
+    if platform.machine() not in ("x86_64", "AMD64") or not flags:
+        return None
+    return [p for p, need in SIMD_PATH_FLAGS.items() if need <= flags] + ["portable"]
 
 
 def usable_cores() -> int:

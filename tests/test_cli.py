@@ -9,10 +9,11 @@ import sys
 import numpy as np
 import pytest
 
+from millscope.app.cli import pair_search_line
 from millscope.cli import main
 from millscope.synthetic import SyntheticTorque, synthetic_record
 
-from .cpu import runs_wide_pair_search, usable_cores
+from .cpu import usable_cores, x86_simd_paths
 
 
 @pytest.fixture
@@ -23,50 +24,66 @@ def csv_record(tmp_path):
     return path
 
 
-WIDE_LINE = "pair search       AVX-512, 8 listed pairs at a time"
-PORTABLE_LINE = "pair search       portable, one listed pair at a time (no AVX-512 F and VL here)"
-TURNED_OFF_LINE = ("pair search       portable, one listed pair at a time (turned off by "
-                   "MILLSCOPE_NO_WIDE_PAIRS)")
+def _info(env: dict[str, str]) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "millscope", "info"], capture_output=True,
+                          text=True, env=env)
+
+
+def _pair_search(out: str) -> str:
+    return next(line for line in out.splitlines()
+                if line.startswith("pair search")).split(maxsplit=2)[2]
 
 
 def test_info_runs_as_a_module() -> None:
-    """The pair search line says which search this CPU runs, as /proc/cpuinfo tells it: on a
-    CPU with AVX-512 and on one without (the portable line names AVX-512 too, as missing)."""
-    out = subprocess.run([sys.executable, "-m", "millscope", "info"], capture_output=True,
-                         text=True, check=True).stdout
-    assert "FFTW" in out and "fftw-3" in out and "OpenMP" in out and "threads" in out
-    search = next(line for line in out.splitlines() if line.startswith("pair search"))
-    turned_off = os.environ.get("MILLSCOPE_NO_WIDE_PAIRS", "") not in ("", "0")
-    assert search == (WIDE_LINE if runs_wide_pair_search() else
-                      TURNED_OFF_LINE if turned_off else PORTABLE_LINE)
+    """The pair search line says which search this CPU runs by default, as /proc/cpuinfo tells
+    it (x86-64: AVX-512, AVX2 or neither), and lists the SIMD paths."""
+    env = {k: v for k, v in os.environ.items() if k != "MILLSCOPE_SIMD"}
+    out = _info(env)
+    assert out.returncode == 0, out.stderr
+    assert "FFTW" in out.stdout and "fftw-3" in out.stdout and "OpenMP" in out.stdout
+    paths = x86_simd_paths()
+    if paths is None:
+        pytest.skip("not an x86-64 Linux host")
+    widest = {"avx512": "AVX-512, 8 listed pairs at a time",
+              "avx2": "AVX2, 4 listed pairs at a time",
+              "portable": "portable, one listed pair at a time (no AVX2, AVX-512, NEON or SVE "
+                          "here)"}[paths[0]]
+    assert _pair_search(out.stdout) == widest
+    assert f"SIMD paths        {', '.join(paths)} (MILLSCOPE_SIMD picks one)" in out.stdout
 
 
-def test_the_wide_search_can_be_turned_off_on_any_host() -> None:
-    """MILLSCOPE_NO_WIDE_PAIRS=1 gives the portable search on every CPU: `info` says so and an
-    engine built under it does not take the wide search (so the suite can be run with it)."""
-    code = ("import millscope._core as c; import sys; "
-            "sys.stdout.write(str(c.build_info()['wide_pair_search']))")
-    env = dict(os.environ, MILLSCOPE_NO_WIDE_PAIRS="1")
-    off = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+def test_millscope_simd_picks_a_path_on_any_host() -> None:
+    """MILLSCOPE_SIMD=portable gives the portable search on every CPU: `info` says so and an
+    engine made under it takes it (so the suite can be run with it); a path the CPU does not
+    run is one line naming the variable and the paths it does run, exit 2."""
+    env = dict(os.environ, MILLSCOPE_SIMD="portable")
+    out = _info(env)
+    assert _pair_search(out.stdout) == ("portable, one listed pair at a time "
+                                        "(MILLSCOPE_SIMD=portable)")
+    code = ("import sys; import numpy as np; import millscope._core as c; "
+            "e = c.Engine([c.Material(7800.0, 8e10, 0.3)], np.array([[0.5]]), "
+            "np.array([[0.3]]), 0, c.DrumGeometry(0.4, 0.3, True, 0, 0.0, 0.0), "
+            "np.array([0.01]), np.array([0], np.int32), 1e-6); "
+            "sys.stdout.write(c.simd_path()[0] + ' ' + e.simd)")
+    ran = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env=env).stdout
-    assert off == "False"
-    out = subprocess.run([sys.executable, "-m", "millscope", "info"], capture_output=True,
-                         text=True, check=True, env=env).stdout
-    assert TURNED_OFF_LINE in out.splitlines()
+    assert ran == "portable portable"
+    bad = _info(dict(os.environ, MILLSCOPE_SIMD="mmx"))
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1
+    assert "MILLSCOPE_SIMD = 'mmx'" in bad.stderr and "'portable'" in bad.stderr
 
 
-@pytest.mark.parametrize("wide, line", [(True, WIDE_LINE), (False, PORTABLE_LINE)])
-def test_info_names_the_pair_search_of_either_cpu(monkeypatch: pytest.MonkeyPatch,
-                                                 capsys: pytest.CaptureFixture[str],
-                                                 wide: bool, line: str) -> None:
-    """Both lines, whatever this host has: the build facts are replaced by a CPU's that has
-    (or lacks) AVX-512."""
-    from millscope import _core
-
-    facts = dict(_core.build_info(), wide_pair_search=wide)
-    monkeypatch.setattr(_core, "build_info", lambda: facts)
-    assert main(["info"]) == 0
-    assert line in capsys.readouterr().out.splitlines()
+@pytest.mark.parametrize("path, lanes, asked, line", [
+    ("avx512", 8, False, "AVX-512, 8 listed pairs at a time"),
+    ("avx2", 4, True, "AVX2, 4 listed pairs at a time"),
+    ("neon", 2, False, "NEON, 2 listed pairs at a time"),
+    ("portable", 1, False, "portable, one listed pair at a time (no AVX2, AVX-512, NEON or SVE "
+                           "here)"),
+    ("portable", 1, True, "portable, one listed pair at a time (MILLSCOPE_SIMD=portable)")])
+def test_info_names_the_pair_search_of_any_cpu(path: str, lanes: int, asked: bool,
+                                               line: str) -> None:
+    """Every line, whatever this host has."""
+    assert pair_search_line(path, lanes, asked) == line
 
 
 @pytest.mark.parametrize("command", [

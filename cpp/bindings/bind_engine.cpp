@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <string>
 #include <type_traits>
 
 #include "millscope/engine.hpp"
@@ -123,6 +124,18 @@ void register_engine(py::module_& m) {
 
   m.attr("GUARD_INTERVAL") = en::guard_interval;  // steps between the state guards' looks
   m.attr("WIDE_BLOCK_LISTED") = en::wide_block_listed;  // listed pairs in a wide-search block
+  m.def("simd_paths", &en::simd_paths,
+        "The SIMD paths of the engine's vector kernels this build runs on this CPU, widest "
+        "first; 'portable' (one listed pair at a time) last");
+  m.def(
+      "simd_path",
+      [](const std::string& name) {
+        const en::SimdPath p = en::simd_path(name);
+        return py::make_tuple(p.name, p.pair_lanes);
+      },
+      arg("name") = "",
+      "(name, listed pairs the pair search tests at once) of a SIMD path; '' for the default: "
+      "the environment's MILLSCOPE_SIMD where set, else the widest");
   m.attr("SNAPSHOT_ARRAYS") = snapshot_arrays();  // Engine.snapshot()'s arrays, by key
   py::class_<en::Engine>(m, "Engine", "The DEM engine: state, step loop, torque (engine.hpp).")
       .def(py::init([](std::vector<materials::Material> materials, const InArray& restitution,
@@ -130,7 +143,7 @@ void register_engine(py::module_& m) {
                        const InArray& radius, const IntArray& material, double dt, double gravity,
                        double skin, bool clamp_normal, int threads, bool reorder,
                        bool track_energy, double max_speed, double max_overlap,
-                       bool wide_pair_search, std::optional<bool> prefetch_partners) {
+                       std::string simd, std::optional<bool> prefetch_partners) {
              en::Config c;
              c.materials = std::move(materials);
              c.restitution.assign(restitution.data(), restitution.data() + restitution.size());
@@ -150,7 +163,7 @@ void register_engine(py::module_& m) {
              c.threads = threads;
              c.max_speed = max_speed;
              c.max_overlap = max_overlap;
-             c.wide_pair_search = wide_pair_search;
+             c.simd = std::move(simd);
              c.prefetch_partners = prefetch_partners;
              return en::Engine(std::move(c));
            }),
@@ -159,7 +172,7 @@ void register_engine(py::module_& m) {
            arg("skin") = 0.0, arg("clamp_normal") = false, arg("threads") = 1,
            arg("reorder") = true, arg("track_energy") = true,
            arg("max_speed") = std::numeric_limits<double>::infinity(), arg("max_overlap") = 0.5,
-           arg("wide_pair_search") = true, arg("prefetch_partners") = py::none())
+           arg("simd") = "", arg("prefetch_partners") = py::none())
       .def_property_readonly("size", &en::Engine::size)
       .def_property_readonly("dt", &en::Engine::dt)
       .def_property_readonly("threads", &en::Engine::threads)
@@ -178,10 +191,14 @@ void register_engine(py::module_& m) {
                              "Guard: the speed no particle may exceed, m/s")
       .def_property_readonly("max_overlap", &en::Engine::max_overlap,
                              "Guard: the deepest contact allowed, a fraction of the smaller radius")
+      .def_property_readonly("simd", [](const en::Engine& e) { return e.simd().name; },
+                             "The SIMD path of the vector kernels (simd_paths()): asked for, or "
+                             "the environment's MILLSCOPE_SIMD, or the widest; the results are "
+                             "the same on every path")
       .def_property_readonly("wide_pair_search", &en::Engine::wide_pair_search,
-                             "Whether the pair pass finds its touching pairs 8 at a time in "
-                             "AVX-512 registers (asked for, run by this CPU, and the paper's law "
-                             "without the energy ledger); the results are the same either way")
+                             "Whether the pair pass finds its touching pairs a vector at a time "
+                             "(a SIMD path other than 'portable', and the paper's law without "
+                             "the energy ledger); the results are the same either way")
       .def_property_readonly("prefetch_partners", &en::Engine::prefetch_partners,
                              "Whether the wide search asks ahead for the partners' state: asked "
                              "for, or (prefetch_partners=None) while the engine holds more bytes "

@@ -1,6 +1,7 @@
 // millscope._core: the private extension module. Each area registers itself from its own file.
 #include <omp.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <Eigen/Core>
 #include <string>
@@ -39,8 +40,8 @@ PYBIND11_MODULE(_core, m) {
     info["eigen_version"] = std::to_string(EIGEN_WORLD_VERSION) + "." +
                             std::to_string(EIGEN_MAJOR_VERSION) + "." +
                             std::to_string(EIGEN_MINOR_VERSION);
-    // whether the pair pass can find its touching pairs in AVX-512 registers on this CPU
-    info["wide_pair_search"] = millscope::engine::wide_pairs_supported();
+    // the SIMD paths of the vector kernels this CPU runs, widest first
+    info["simd_paths"] = millscope::engine::simd_paths();
     return info;
   }, "Facts about how this extension was built.");
 }

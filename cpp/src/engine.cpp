@@ -3,7 +3,7 @@
 #include "millscope/engine.hpp"
 
 #include "engine_access.hpp"
-#include "touching_pairs.hpp"
+#include "lane_kernels.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -168,15 +168,7 @@ std::string Variant::describe() const {
   return s;
 }
 
-bool wide_pairs_supported() {
-#if MILLSCOPE_WIDE_PAIRS
-  const char* off = std::getenv("MILLSCOPE_NO_WIDE_PAIRS");
-  if (off != nullptr && off[0] != '\0' && !(off[0] == '0' && off[1] == '\0')) return false;
-  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-#else
-  return false;
-#endif
-}
+const SimdPath& Engine::simd() const { return lanes_->path; }
 
 void Engine::set_running_threads(int n) {
   if (n < 1 || n > threads_)
@@ -185,8 +177,8 @@ void Engine::set_running_threads(int n) {
 }
 
 bool Engine::wide_pair_search() const {
-  return config_.wide_pair_search && variant_.law == Variant::Law::hertz_mindlin &&
-         !variant_.track_energy && wide_pairs_supported();
+  return lanes_->path.pair_lanes > 1 && variant_.law == Variant::Law::hertz_mindlin &&
+         !variant_.track_energy;
 }
 
 namespace {
@@ -229,6 +221,7 @@ Engine::Engine(Config config)
       dt_(config_.dt),
       threads_(config_.threads),
       running_threads_(config_.threads),
+      lanes_(&lane_kernels(config_.simd)),
       pairs_(config_.materials, config_.restitution, config_.friction),
       list_(config_.skin > 0.0 ? config_.skin : default_skin(config_.radius),
             0, config_.geometry.end_walls ? 0.0 : config_.geometry.length) {

@@ -77,6 +77,8 @@ DEFAULT_DT_FRACTION: float
 MAX_DT_FRACTION: float
 GUARD_INTERVAL: int
 WIDE_BLOCK_LISTED: int
+def simd_paths() -> list[str]: ...
+def simd_path(name: str = "") -> tuple[str, int]: ...
 SNAPSHOT_ARRAYS: tuple[str, ...]
 
 class Material(metaclass=_pybind11_type):
@@ -255,7 +257,7 @@ class Engine(metaclass=_pybind11_type):
                  dt: float, gravity: float = 9.81, skin: float = 0.0, clamp_normal: bool = False,
                  threads: int = 1, reorder: bool = True,
                  track_energy: bool = True, max_speed: float = ...,
-                 max_overlap: float = 0.5, wide_pair_search: bool = True,
+                 max_overlap: float = 0.5, simd: str = "",
                  prefetch_partners: bool | None = None) -> None: ...
     @property
     def size(self) -> int: ...
@@ -275,6 +277,8 @@ class Engine(metaclass=_pybind11_type):
     def max_speed(self) -> float: ...
     @property
     def max_overlap(self) -> float: ...
+    @property
+    def simd(self) -> str: ...
     @property
     def wide_pair_search(self) -> bool: ...
     @property

@@ -14,7 +14,7 @@ import pytest
 from millscope import _core
 from millscope.contact import hertz_contact_time, hertz_max_overlap, pair_properties, rayleigh_time
 
-from ..cpu import runs_wide_pair_search
+from ..cpu import x86_simd_paths
 
 STEEL = (7860.0, 81e9, 0.3)  # density kg/m^3, shear modulus Pa, Poisson ratio (Table 2)
 G = 9.81
@@ -345,16 +345,32 @@ def test_storage_order_is_invisible_to_the_caller() -> None:
     assert np.allclose(a.velocities, b.velocities, rtol=0, atol=1e-9)
 
 
+def test_the_simd_paths_are_those_the_cpu_has() -> None:
+    """The engine's SIMD paths (Google Highway's dispatch) are those /proc/cpuinfo says this
+    x86-64 CPU runs, widest first; "portable" is there on every CPU; an engine takes the widest
+    unless told (simd=, MILLSCOPE_SIMD) and refuses a path the CPU does not run, naming it."""
+    paths = _core.simd_paths()
+    assert paths[-1] == "portable"
+    expected = x86_simd_paths()
+    if expected is not None:
+        assert paths == expected
+    eng = make_engine([0.01], simd="portable")
+    assert eng.simd == "portable" and not eng.wide_pair_search
+    with pytest.raises(ValueError, match="simd = 'mmx'.*'portable'"):
+        make_engine([0.01], simd="mmx")
+
+
 @pytest.mark.parametrize("end_walls", [True, False])
-def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None:
-    """The pair pass finds its touching pairs 8 at a time in AVX-512 registers where the CPU
-    has them (touching_pairs.hpp), else one at a time. Both must give the run that the energy
-    ledger's kernel gives (contact::pair_force, a pair at a time): the same positions,
-    velocities, spins and torque, to the bit; so must the wide search told to prefetch the
-    partners' state (which it does unasked only where the data exceed the last-level cache).
-    Polydisperse, with friction, periodic ends or end walls, and one big sphere stored first,
-    whose list row holds more pairs than a block of the wide search
-    (_core.WIDE_BLOCK_LISTED): that row makes a block of its own."""
+def test_every_simd_path_gives_the_same_run_to_the_bit(end_walls: bool) -> None:
+    """The pair pass finds its touching pairs a vector at a time (touching_pairs.hpp: 8 with
+    AVX-512, 4 with AVX2) or one at a time (the portable path), and computes their forces in the
+    path's lanes. Every path this CPU runs must give the run that the energy ledger's kernel
+    gives (contact::pair_force, a pair at a time): the same positions, velocities, spins and
+    torque, to the bit; so must each wide search told to prefetch the partners' state (which
+    it does unasked only where the data exceed the last-level cache). Polydisperse, with
+    friction, periodic ends or end walls, and one big sphere stored first, whose list row holds
+    more pairs than a block of the wide search (_core.WIDE_BLOCK_LISTED): that row makes a
+    block of its own."""
     rng = np.random.default_rng(2)
     R, L, r_small, r_big = 0.2, 0.3, 0.008, 0.1
     centre = np.array([0.0, 0.0, L / 2])
@@ -372,14 +388,18 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
                              rng.uniform(0.6 * r_small, r_small, len(grid))])
     speed = rng.normal(0.0, 1.0, positions.shape)  # m/s: the list is rebuilt now and then
     soft = (7860.0, 81e8, 0.3)
+    wide_paths = [p for p in _core.simd_paths() if p != "portable"]
+    options = {"ledger": dict(track_energy=True),
+               "portable": dict(track_energy=False, simd="portable")}
+    for path in wide_paths:
+        options[path] = dict(track_energy=False, simd=path)
+        options[path + " prefetching"] = dict(track_energy=False, simd=path,
+                                              prefetch_partners=True)
     runs = {}
-    for name, options in {"wide": dict(track_energy=False),
-                          "prefetch": dict(track_energy=False, prefetch_partners=True),
-                          "portable": dict(track_energy=False, wide_pair_search=False),
-                          "ledger": dict(track_energy=True)}.items():
+    for name, opts in options.items():
         eng = make_engine(radius, material=soft, drum_radius=R, length=L, lifters=8,
                           end_walls=end_walls, positions=positions, velocities=speed,
-                          reorder=False, threads=2, **options)
+                          reorder=False, threads=2, **opts)
         eng.start_rotation(4.0)
         first = eng.advance_sampled(eng.dt, False, 1)[:, 1]
         start = eng.snapshot()["list_start"]
@@ -387,18 +407,17 @@ def test_wide_pair_search_gives_the_same_run_to_the_bit(end_walls: bool) -> None
         assert start[1] - start[0] > _core.WIDE_BLOCK_LISTED
         torque = np.concatenate([first, eng.advance_sampled(eng.dt, False, 1500)[:, 1]])
         runs[name] = (eng, torque)
-    wide, prefetch, portable, ledger = (runs[k][0]
-                                        for k in ("wide", "prefetch", "portable", "ledger"))
-    assert wide.wide_pair_search == runs_wide_pair_search()
-    assert not portable.wide_pair_search and not ledger.wide_pair_search
-    # 1201 spheres hold well under a megabyte: no prefetching unless asked (and only the wide
-    # search prefetches)
-    assert wide.bytes_per_particle * wide.size < 2**20 and not wide.prefetch_partners
-    assert prefetch.prefetch_partners == runs_wide_pair_search()
-    assert not portable.prefetch_partners and not ledger.prefetch_partners
-    assert wide.list_builds >= 2 and np.abs(runs["ledger"][1]).max() > 0
-    for name in ("wide", "prefetch", "portable"):
-        eng, torque = runs[name]
+    ledger = runs["ledger"][0]
+    assert not runs["portable"][0].wide_pair_search and not ledger.wide_pair_search
+    assert not runs["portable"][0].prefetch_partners and not ledger.prefetch_partners
+    for path in wide_paths:
+        eng, prefetching = runs[path][0], runs[path + " prefetching"][0]
+        assert eng.simd == path and eng.wide_pair_search
+        # 1201 spheres hold well under a megabyte: no prefetching unless asked
+        assert eng.bytes_per_particle * eng.size < 2**20 and not eng.prefetch_partners
+        assert prefetching.prefetch_partners
+    assert ledger.list_builds >= 2 and np.abs(runs["ledger"][1]).max() > 0
+    for name, (eng, torque) in runs.items():
         assert np.array_equal(torque, runs["ledger"][1]), name
         for field in ("positions", "velocities", "spins"):
             assert np.array_equal(getattr(eng, field), getattr(ledger, field)), (name, field)

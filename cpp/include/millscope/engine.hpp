@@ -61,9 +61,10 @@ struct Config {
   bool reorder = true;              // store the particles in cell order at each list build
   bool track_energy = true;         // book the dissipated energy (Ledger); off: only drive_work
   int threads = 1;
-  // Find the touching pairs of the pair pass 8 at a time in AVX-512 registers where the CPU has
-  // them (touching_pairs.hpp; same result to the bit); false: the portable search.
-  bool wide_pair_search = true;
+  // The SIMD path of the vector kernels (simd_path): "" for the environment's MILLSCOPE_SIMD
+  // or else the widest the CPU runs; "portable" for the portable pair search. Every path
+  // gives the same results to the bit.
+  std::string simd;
   // Whether the wide search asks for the state of the partners it will read a few dozen rows
   // ahead (touching_pairs.hpp, PartnerPrefetch; same results to the bit). Unset: when the
   // engine's data exceed the last-level cache (Engine::prefetch_partners).
@@ -145,15 +146,31 @@ inline constexpr long guard_interval = 8;
 /// mill's charges.
 inline constexpr std::size_t wide_block_listed = 224;
 
-/// Whether this build and this CPU run the wide pair search (src/touching_pairs.hpp). Setting
-/// the environment variable MILLSCOPE_NO_WIDE_PAIRS (to anything but "" or "0") turns it off,
-/// so that the portable search can be run and tested on a CPU that has AVX-512.
-bool wide_pairs_supported();
+/// A SIMD path of the engine's vector kernels (src/lane_kernels.hpp): the pair pass's search
+/// for touching pairs and its contact forces, compiled for each target by Google Highway.
+struct SimdPath {
+  /// "avx512", "avx2", "neon", "sve", ... (the target), or "portable": the baseline build's
+  /// lanes and the portable pair search, one listed pair at a time.
+  std::string name;
+  /// Listed pairs the pair search tests at once: the target's doubles in a vector (the wide
+  /// search, src/touching_pairs.hpp), 1 for the portable search.
+  std::size_t pair_lanes = 1;
+};
+
+/// The SIMD paths this build runs on this CPU, widest first; "portable" last, always there.
+std::vector<std::string> simd_paths();
+
+/// The path called `name` (one of simd_paths()), or for "" the default: the environment's
+/// MILLSCOPE_SIMD where it is set and not empty, else the widest. An unknown name, or one this
+/// CPU cannot run, is an std::invalid_argument naming the setting (Config::simd or
+/// MILLSCOPE_SIMD), the value and the valid names.
+SimdPath simd_path(const std::string& name = "");
 
 /// Wall contact history per particle: shell, low end, high end, and two lifter slots.
 inline constexpr std::size_t wall_slots = 5;
 
 class Engine;
+struct LaneKernels;  // src/lane_kernels.hpp
 
 /// Doubles per particle in each thread's pair buffer: force and torque (6), and when the step
 /// books the dissipated energy (a law that dissipates, Config::track_energy), the dissipating
@@ -204,9 +221,11 @@ class Engine {
   double skin() const { return list_.skin(); }
   double max_speed() const { return config_.max_speed; }      // guard, m/s
   double max_overlap() const { return config_.max_overlap; }  // guard, of the smaller radius
-  /// Whether the pair pass finds its touching pairs with the wide search: asked for
-  /// (Config::wide_pair_search), run by this CPU, and a scene whose contacts are computed in
-  /// lanes (the paper's law without the energy ledger).
+  /// The SIMD path of the vector kernels (Config::simd, chosen when the engine is made).
+  const SimdPath& simd() const;
+  /// Whether the pair pass finds its touching pairs with the wide search: a SIMD path that has
+  /// it (not "portable") and a scene whose contacts are computed in lanes (the paper's law
+  /// without the energy ledger).
   bool wide_pair_search() const;
   /// Whether the wide search prefetches the partners' state: asked for
   /// (Config::prefetch_partners) or, unset, when the engine holds more bytes than the CPU's
@@ -330,6 +349,7 @@ class Engine {
   int running_threads_;  // the threads that run them (the results do not)
   Variant variant_;
   StepKernel kernel_;
+  const LaneKernels* lanes_;  // the SIMD path's kernels (Config::simd)
   materials::PairTable pairs_;
   neighbors::VerletList list_;
 

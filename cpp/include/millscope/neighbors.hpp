@@ -30,8 +30,6 @@
 #include <utility>
 #include <vector>
 
-#include "millscope/lanes.hpp"
-
 namespace millscope::neighbors {
 
 /// Empties v and gives its memory back (`v = {}` would keep the capacity).
@@ -54,18 +52,11 @@ inline double squared_test_reach(double ri, double rj, double skin) {
 /// near[k] = whether candidate k (centre x[k], y[k], z[k], radius r[k]; k < m) passes the
 /// list's first, squared test against a sphere at xi, yi, zi of radius ri (VerletList::
 /// is_partner, in the same operations): |d|^2 < squared_test_reach(ri, r_k, skin)^2.
-/// Not for a periodic axis.
-MILLSCOPE_LANE_TARGETS inline void near_in_lanes(double xi, double yi, double zi, double ri,
-                                                 double skin, const double* x, const double* y,
-                                                 const double* z, const double* r,
-                                                 std::size_t m, unsigned char* near) {
-#pragma omp simd
-  for (std::size_t k = 0; k < m; ++k) {
-    const double sx = xi - x[k], sy = yi - y[k], sz = zi - z[k];
-    const double far = squared_test_reach(ri, r[k], skin);
-    near[k] = sx * sx + sy * sy + sz * sz < far * far;
-  }
-}
+/// Not for a periodic axis. In SIMD lanes, in the widest the CPU has (src/near_in_lanes-inl.hpp,
+/// dispatched by Google Highway); a comparison gives the same answer in any lanes.
+void near_in_lanes(double xi, double yi, double zi, double ri, double skin, const double* x,
+                   const double* y, const double* z, const double* r, std::size_t m,
+                   unsigned char* near);
 
 class VerletList {
  public:

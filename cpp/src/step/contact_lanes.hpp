@@ -1,14 +1,13 @@
-// The paper's law for a block of contacts in SIMD lanes, and the block's arrays (the pair
-// pass's, src/step/pair_pass_lanes.hpp). Private to the library.
+// The block of contacts the pair pass computes in SIMD lanes (src/step/pair_pass_lanes.hpp),
+// and the signature of the loop that computes them (contact_lanes-inl.hpp, compiled once per
+// SIMD target in lane_kernels.cpp). Private to the library.
 #pragma once
 
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
-#include "millscope/contact.hpp"
-#include "millscope/lanes.hpp"
+#include "millscope/engine.hpp"  // wide_block_listed
 #include "millscope/materials.hpp"
 #include "touching_pairs.hpp"
 
@@ -29,7 +28,7 @@ struct ContactBatch {
   std::vector<double> tix, tiy, tiz, tjx, tjy, tjz;  // torques on i and on j, N m
   std::vector<double> row_sum;  // force, N, and torque, N m, on each row's particle: 6 a row
 
-  // The wide search's scratch (touching_pairs_wide): each listed pair's row.
+  // The wide search's scratch (touching_pairs.hpp): each listed pair's row.
   std::vector<std::uint32_t> slot_row;
 
   ContactBatch() : row_sum(6 * max_rows) {
@@ -46,90 +45,22 @@ struct ContactBatch {
       v->resize(need);
   }
   /// Room for a block of `listed` listed pairs in the wide search, which stores whole
-  /// registers of 8 past its last entry.
+  /// vectors past its last entry.
   void reserve_listed(std::size_t listed) {
-    const std::size_t need = listed + 8;
+    const std::size_t need = listed + max_search_lanes;
     if (need > slot_row.size()) slot_row.resize(need);
     if (need > overlap.size()) reserve(need - size);
   }
 };
 
 /// The paper's law (contact::HertzMindlin: Hertz (1), viscous damping (2), Mindlin no-slip
-/// spring (5)-(7) with the Coulomb limit (8), unclamped) for every contact of a block, written
-/// branch-free so that the compiler computes several contacts in the lanes of one instruction
-/// (`omp simd`; the sliding select needs -fno-trapping-math). Every operation is the one
-/// contact::pair_force does, in the same order, so the forces are the same to the bit
-/// (tests: a run with the energy ledger, which takes contact::pair_force, moves the same).
-/// Particles are read through the pairs' indices (radius r, m; inverse mass, 1/kg; velocity,
-/// m/s; spin, rad/s); `pairs` holds the pair constants; dt, s, advances the springs.
-MILLSCOPE_LANE_TARGETS inline void contact_forces_in_lanes(
-    ContactBatch& b, const materials::PairConstants* pairs, const double* r, const double* inv_m,
-    const double* vx, const double* vy, const double* vz, const double* wx, const double* wy,
-    const double* wz, double dt) {
-  using Normal = contact::HertzMindlin::normal_part;
-  using Damping = contact::HertzMindlin::damping_part;
-  using Tangential = contact::HertzMindlin::tangential_part;
-  const std::size_t n = b.size;
-  const std::uint32_t* __restrict bi = b.i.data();
-  const std::uint32_t* __restrict bj = b.j.data();
-  const std::uint32_t* __restrict bp = b.pair.data();
-  const double* __restrict dxs = b.dx.data();
-  const double* __restrict dys = b.dy.data();
-  const double* __restrict dzs = b.dz.data();
-  double* __restrict sxs = b.sx.data();
-  double* __restrict sys = b.sy.data();
-  double* __restrict szs = b.sz.data();
-  double* __restrict overlaps = b.overlap.data();
-  double* __restrict fxs = b.fx.data();
-  double* __restrict fys = b.fy.data();
-  double* __restrict fzs = b.fz.data();
-  double* __restrict tixs = b.tix.data();
-  double* __restrict tiys = b.tiy.data();
-  double* __restrict tizs = b.tiz.data();
-  double* __restrict tjxs = b.tjx.data();
-  double* __restrict tjys = b.tjy.data();
-  double* __restrict tjzs = b.tjz.data();
-#pragma omp simd
-  for (std::size_t c = 0; c < n; ++c) {
-    const std::uint32_t i = bi[c], j = bj[c];
-    const materials::PairConstants& p = pairs[bp[c]];
-    const double dx = dxs[c], dy = dys[c], dz = dzs[c];
-    const double ri = r[i], rj = r[j], r_sum = ri + rj;
-    const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const double inv_dist = 1.0 / dist;
-    const double nx = dx * inv_dist, ny = dy * inv_dist, nz = dz * inv_dist;  // j to i
-    // contact-point velocity of i relative to j: (v_i - v_j) + (w_i x (-r_i n) - w_j x (r_j n))
-    const double ax = -ri * nx, ay = -ri * ny, az = -ri * nz;
-    const double bx = rj * nx, by = rj * ny, bz = rj * nz;
-    const double vrx = (vx[i] - vx[j]) + ((wy[i] * az - wz[i] * ay) - (wy[j] * bz - wz[j] * by));
-    const double vry = (vy[i] - vy[j]) + ((wz[i] * ax - wx[i] * az) - (wz[j] * bx - wx[j] * bz));
-    const double vrz = (vz[i] - vz[j]) + ((wx[i] * ay - wy[i] * ax) - (wx[j] * by - wy[j] * bx));
-    const double r_star = ri * rj / r_sum;
-    const double m_star = 1.0 / (inv_m[i] + inv_m[j]);
-    const double d_n = r_sum - dist;
-    const double v_n = vrx * nx + vry * ny + vrz * nz;
-    const double vtx = vrx - v_n * nx, vty = vry - v_n * ny, vtz = vrz - v_n * nz;
-    const double sqrt_rd = std::sqrt(r_star * d_n);
-    const double s_n = Normal::stiffness(p, sqrt_rd);            // (4)
-    const double gamma_n = Damping::gamma(p, s_n, m_star);       // (2)
-    const double f_n = Normal::force(s_n, d_n) - gamma_n * v_n;  // (1), (2)
-    const double s_t = Tangential::stiffness(p, sqrt_rd);        // (6)
-    double sx = sxs[c], sy = sys[c], sz = szs[c];
-    Tangential::turn(sx, sy, sz, nx, ny, nz);
-    Tangential::advance(sx, sy, sz, vtx, vty, vtz, dt);
-    const double gamma_t = gamma_n * p.tangential_damping_ratio;  // (7)
-    double ftx, fty, ftz;
-    Tangential::trial(s_t, gamma_t, sx, sy, sz, vtx, vty, vtz, ftx, fty, ftz);  // (5), (7)
-    const bool sliding = Tangential::limit(p, f_n, ftx, fty, ftz);              // (8)
-    sxs[c] = sliding ? -ftx / s_t : sx;
-    sys[c] = sliding ? -fty / s_t : sy;
-    szs[c] = sliding ? -ftz / s_t : sz;
-    overlaps[c] = d_n;
-    fxs[c] = f_n * nx + ftx, fys[c] = f_n * ny + fty, fzs[c] = f_n * nz + ftz;
-    const double cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
-    tixs[c] = -ri * cx, tiys[c] = -ri * cy, tizs[c] = -ri * cz;  // (-r_i n) x F_t
-    tjxs[c] = -rj * cx, tjys[c] = -rj * cy, tjzs[c] = -rj * cz;  // (r_j n) x (-F_t)
-  }
-}
+/// spring (5)-(7) with the Coulomb limit (8), unclamped) for every contact of a block, in SIMD
+/// lanes (contact_lanes-inl.hpp), the same to the bit as contact::pair_force. Particles are
+/// read through the pairs' indices (radius r, m; inverse mass, 1/kg; velocity, m/s; spin,
+/// rad/s); `pairs` holds the pair constants; dt, s, advances the springs.
+using ContactForcesInLanes = void (*)(ContactBatch& b, const materials::PairConstants* pairs,
+                                      const double* r, const double* inv_m, const double* vx,
+                                      const double* vy, const double* vz, const double* wx,
+                                      const double* wy, const double* wz, double dt);
 
 }  // namespace millscope::engine

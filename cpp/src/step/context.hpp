@@ -17,8 +17,7 @@
 #include "millscope/contact.hpp"
 #include "millscope/drum.hpp"
 #include "millscope/engine.hpp"
-#include "step/contact_lanes.hpp"
-#include "touching_pairs.hpp"
+#include "lane_kernels.hpp"
 
 namespace millscope::engine {
 
@@ -72,7 +71,7 @@ struct Engine::Access::Step {
   static constexpr bool dissipates = Law::dissipates && Tally;
   static constexpr std::size_t width = buffer_width(dissipates);  // per-thread buffer, x n doubles
   // The paper's law without the ledger computes its pair contacts in SIMD lanes
-  // (contact_forces_in_lanes); the ledger's kernels and the other laws take pair_force.
+  // (contact_lanes.hpp); the ledger's kernels and the other laws take pair_force.
   static constexpr bool in_lanes = std::is_same_v<Law, contact::HertzMindlin> && !Tally;
   static_assert(hs == Law::tangential_part::history_size,
                 "the pair history is the tangential spring alone, odd under swapping the pair "
@@ -101,8 +100,10 @@ struct Engine::Access::Step {
   // The sums of each particle, in the layout of a thread's pair buffer: force, N; torque, N m;
   // with the ledger, the dissipating force and its torque (e.dissipative_).
   double* own[12];
-  // The wide search where the CPU can (Engine::wide_pair_search), asking ahead for the state
-  // of the partners where the data exceed the caches.
+  // The SIMD path's kernels (Engine::simd): the wide search where the path has it
+  // (Engine::wide_pair_search), asking ahead for the state of the partners where the data
+  // exceed the caches.
+  const LaneKernels& lanes;
   bool wide, prefetch;
   PartnerPrefetch ahead;
   // Two sets of per-thread partials, by step parity: step s writes set s % 2 while the threads
@@ -191,6 +192,7 @@ Engine::Access::Step<S>::Step(Engine& engine, StepObserver* obs)
       r(engine.r_.data()), m(engine.m_.data()), inv_m(engine.inv_m_.data()),
       inv_i(engine.inv_i_.data()), mat(engine.mat_.data()),
       own{fx, fy, fz, tx, ty, tz, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr},
+      lanes(*engine.lanes_),
       wide(in_lanes && engine.wide_pair_search()),
       prefetch(wide && engine.prefetch_partners()),
       ahead{{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m}},

@@ -1,7 +1,8 @@
 // Stage: the pair pass of the paper's law without the ledger (Engine::Access::Step), each
-// block of rows in three phases: 1. its touching pairs (the wide search where the CPU can,
-// touching_pairs.hpp, else the portable one), 2. their forces in SIMD lanes
-// (contact_forces_in_lanes), 3. the springs back, and the sums.
+// block of rows in three phases: 1. its touching pairs (the wide search where the SIMD path has
+// it, touching_pairs.hpp, else the portable one), 2. their forces in SIMD lanes
+// (contact_lanes.hpp), 3. the springs back, and the sums. The vector kernels are the engine's
+// SIMD path's (lane_kernels.hpp).
 #pragma once
 
 #include "step/context.hpp"
@@ -44,7 +45,6 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
   };
   ContactBatch& b = *batches[static_cast<std::size_t>(t)];
   const materials::PairConstants* const pairs = OneMaterial ? &pc_one : &table(0, 0);
-#if MILLSCOPE_WIDE_PAIRS
   if (wide) {
     for (std::size_t block = row_begin; block < own_end;) {
       // 1. The touching pairs of the rows [block, block_end), which hold at most
@@ -58,12 +58,9 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       b.reserve_listed(s1 - s0);
       const TouchingPairs out{b.i.data(),  b.j.data(),  b.slot.data(),
                               b.dx.data(), b.dy.data(), b.dz.data()};
-      auto search = [&](auto with_prefetch) {
-        return touching_pairs_wide<!EndWalls, decltype(with_prefetch)::value>(
-            block, block_end, start, partner, x, y, z, r, n, period, b.slot_row.data(), out,
-            ahead);
-      };
-      b.size = prefetch ? search(std::true_type{}) : search(std::false_type{});
+      b.size = lanes.touching_pairs[!EndWalls][prefetch](block, block_end, start, partner, x, y,
+                                                         z, r, n, period, b.slot_row.data(),
+                                                         out, ahead);
       for (std::size_t c = 0; c < b.size; ++c) {
         const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
         b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
@@ -76,13 +73,12 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       std::fill(history + static_cast<std::size_t>(s0) * hs,
                 history + static_cast<std::size_t>(s1) * hs, 0.0);
       // 2. Their forces, several at a time.
-      contact_forces_in_lanes(b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
+      lanes.contact_forces(b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
       sum_block(b, block, block_end);
       block = block_end;
     }
     return;
   }
-#endif
   for (std::size_t block = row_begin; block < own_end;) {
     // 1. The touching pairs of the rows [block, block_end); a listed pair that does not
     // touch has its history cleared.
@@ -115,7 +111,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       ++block_end;
     }
     // 2. Their forces, several at a time.
-    contact_forces_in_lanes(b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
+    lanes.contact_forces(b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
     sum_block(b, block, block_end);
     block = block_end;
   }

@@ -76,9 +76,22 @@ def _print_table(table: DataFrame, fmt: str) -> None:
     sys.stdout.write(frame_text(table, fmt))
 
 
+#: How ``info`` names the SIMD paths of the engine's kernels (``_core.simd_paths``).
+_SIMD_LABELS = {"avx512": "AVX-512", "avx2": "AVX2", "neon": "NEON", "sve": "SVE", "sve2": "SVE2"}
+
+
+def pair_search_line(path: str, pair_lanes: int, asked: bool) -> str:
+    """What ``info`` says of the pair search of SIMD path ``path`` (``_core.simd_path``), which
+    tests ``pair_lanes`` listed pairs at a time; ``asked``: chosen by MILLSCOPE_SIMD."""
+    if pair_lanes > 1:
+        return f"{_SIMD_LABELS.get(path, path.upper())}, {pair_lanes} listed pairs at a time"
+    why = "MILLSCOPE_SIMD=portable" if asked else "no AVX2, AVX-512, NEON or SVE here"
+    return f"portable, one listed pair at a time ({why})"
+
+
 def cmd_info(_: argparse.Namespace) -> int:
     """Print version and build facts."""
-    from .._core import build_info
+    from .._core import build_info, simd_path
 
     info = build_info()
     print(f"millscope {__version__}")
@@ -89,12 +102,10 @@ def cmd_info(_: argparse.Namespace) -> int:
     print(f"OpenMP            {info['openmp_version']}, {info['openmp_max_threads']} threads")
     print(f"FFTW              {info['fftw_version']}")
     print(f"Eigen             {info['eigen_version']}")
-    turned_off = os.environ.get("MILLSCOPE_NO_WIDE_PAIRS", "") not in ("", "0")
-    search = ("AVX-512, 8 listed pairs at a time" if info["wide_pair_search"]
-              else "portable, one listed pair at a time (" +
-              ("turned off by MILLSCOPE_NO_WIDE_PAIRS" if turned_off
-               else "no AVX-512 F and VL here") + ")")
-    print(f"pair search       {search}")
+    print(f"SIMD paths        {', '.join(info['simd_paths'])} (MILLSCOPE_SIMD picks one)")
+    path, pair_lanes = simd_path()  # a MILLSCOPE_SIMD this CPU cannot run: ValueError
+    print(f"pair search       "
+          f"{pair_search_line(path, pair_lanes, os.environ.get('MILLSCOPE_SIMD', '') != '')}")
     return 0
 
 

@@ -650,10 +650,12 @@ class Simulation:
         values of the wrong type or precision, a time step outside the scene's range), or
         whose saved thread count exceeds the cores this process may use (pass ``threads``)
         raises :class:`CheckpointError` and nothing else; ``threads`` and ``track_energy``
-        themselves are checked as in the constructor (``ValueError``).
+        themselves are checked as in the constructor (``ValueError``), and so is the
+        environment's MILLSCOPE_SIMD (the SIMD path of the engine's kernels).
         """
         if threads is not None:
             threads = check_threads(threads)
+        _core.simd_path()  # a MILLSCOPE_SIMD this CPU cannot run: ValueError, not the file's
         if track_energy is not None and not isinstance(track_energy, (bool, np.bool_)):
             raise ValueError(f"track_energy = {track_energy!r} is not valid; it must be None, "
                              "True or False")

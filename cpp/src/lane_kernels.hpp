@@ -1,0 +1,28 @@
+// The engine's vector kernels for one SIMD path, chosen when an Engine is made: the widest the
+// CPU runs, or the one asked for (Config::simd, or the environment's MILLSCOPE_SIMD), so that
+// tests can run every path a CPU has against the others. The kernels are compiled once per
+// SIMD target by Google Highway (lane_kernels.cpp); every path computes the same bits.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "millscope/engine.hpp"  // SimdPath, simd_paths
+#include "step/contact_lanes.hpp"
+#include "touching_pairs.hpp"
+
+namespace millscope::engine {
+
+/// One SIMD path's kernels.
+struct LaneKernels {
+  SimdPath path;
+  /// The wide search (touching_pairs.hpp), [periodic][prefetch]; null for the portable search.
+  TouchingPairsSearch touching_pairs[2][2] = {};
+  /// The paper's law for a block of contacts (contact_lanes.hpp).
+  ContactForcesInLanes contact_forces = nullptr;
+};
+
+/// The kernels of path `name`, as simd_path(name) chooses it.
+const LaneKernels& lane_kernels(const std::string& name);
+
+}  // namespace millscope::engine
