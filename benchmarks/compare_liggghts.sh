@@ -165,6 +165,14 @@ median() {
     if (NR % 2) print v[(NR + 1) / 2]; else printf "%.6g\n", (v[NR / 2] + v[NR / 2 + 1]) / 2 }'
 }
 
+# Each pair is also appended to benchmarks/results/compare_liggghts.csv (CSV=... to change).
+CSV=${CSV:-$ROOT/benchmarks/results/compare_liggghts.csv}
+CPU_MODEL=$(sed -n 's/^model name[[:space:]]*:[[:space:]]*//p' /proc/cpuinfo 2>/dev/null | head -n 1 | tr ',' ' ')
+SIMD_PATH=$("$PY" -c 'from millscope import _core; print(_core.simd_path()[0])' 2>/dev/null || echo unknown)
+STAMP=$(date -u +%Y-%m-%dT%H:%M:%SZ)
+mkdir -p "$(dirname "$CSV")"
+[ -s "$CSV" ] || echo "utc,cpu,simd_path,scene,nprocs,steps,dt_s,pair,liggghts_particle_steps_per_s,millscope_particle_steps_per_s,ratio,core_handoff_ns" > "$CSV"
+
 ligs=(); mss=(); ratios=()
 for ((k = 1; k <= REPEAT; k++)); do
   if [ "$REPEAT" -gt 1 ]; then echo "== pair $k of $REPEAT"; fi
@@ -193,6 +201,7 @@ for ((k = 1; k <= REPEAT; k++)); do
   if [ "$REPEAT" -gt 1 ]; then
     echo "pair $k: ratio ${ratios[-1]}${handoff:+ (core hand-off $handoff ns)}"
   fi
+  echo "$STAMP,$CPU_MODEL,$SIMD_PATH,$SCENE,$NP,$STEPS,$DT,$k,$lig,$ms,${ratios[-1]},$handoff" >> "$CSV"
 done
 
 echo "== same scene ($SCENE), dt = $DT s, $STEPS steps, $NP process(es)/thread(s)"
