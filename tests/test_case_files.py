@@ -96,7 +96,7 @@ def test_run_writes_the_record_the_python_api_gives(tmp_path, monkeypatch, capsy
     # the same run built directly on the engine
     scene = pilot_mill(0.71, None, 1, "tiny")
     sim = ms.Simulation(scene, seed=3, dt=0.2 * scene.min_rayleigh_time()[0], threads=1,
-                        **SETTLE)
+                        track_energy=True, **SETTLE)  # the case file asks for the ledger
     full = sim.run(0.3, sample_dt=0.01, sampling="mean", progress=False)
     kept = slice(10, None)  # 0.1 s of warm-up at 0.01 s
 
