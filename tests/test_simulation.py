@@ -155,6 +155,13 @@ def test_track_energy_is_kept_by_a_checkpoint(tmp_path) -> None:  # type: ignore
     path = sim.save(tmp_path / "c.npz")
     assert ms.Simulation.load(path).track_energy is False
     assert ms.Simulation.load(path, track_energy=True).track_energy is True
+    # a run that did not book the losses from its start cannot give them later
+    sim.run(0.05, progress=False)
+    late = ms.Simulation.load(sim.save(tmp_path / "d.npz"), track_energy=True)
+    late.run(0.05, progress=False)
+    with pytest.raises(ms.LedgerOffError, match=r"ran before its checkpoint"):
+        late.energies()["dissipated"]
+    assert late.energies()["drive_work"] > 0
     with pytest.raises(ValueError, match=r"track_energy = 'no' is not valid"):
         ms.Simulation(scene, track_energy="no")  # type: ignore[arg-type]
 

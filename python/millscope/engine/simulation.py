@@ -124,10 +124,9 @@ class Energies(dict[str, float]):
     def __missing__(self, key: str) -> float:
         if key in LEDGER_ONLY:
             raise LedgerOffError(
-                f"energies()[{key!r}] is not booked: this Simulation runs without the energy "
-                "ledger; make it with Simulation(..., track_energy=True), or load its "
-                "checkpoint with Simulation.load(path, track_energy=True), to book the losses "
-                "from then on")
+                f"energies()[{key!r}] is not booked: this Simulation runs, or ran before its "
+                "checkpoint, without the energy ledger; make it with "
+                "Simulation(..., track_energy=True) to book the losses from the start")
         raise KeyError(key)
 
 
@@ -356,16 +355,17 @@ class Simulation:
         4 % at the default step.
 
         A simulation made without ``track_energy`` books none of the losses nor
-        ``spring_work``: the mapping then holds the first four only, and asking it for the
-        others raises :class:`LedgerOffError` (a ``KeyError``) that says how to book them.
+        ``spring_work``, and one loaded with it from a checkpoint of a run without it cannot
+        know them: the mapping then holds the first four only, and asking it for the others
+        raises :class:`LedgerOffError` (a ``KeyError``) that says how to book them.
         """
         e = self._engine
         out = {"kinetic": e.kinetic_energy(), "potential": e.potential_energy(),
                "elastic": e.elastic_energy()}
         out.update(e.ledger())
-        if self.track_energy:
-            return Energies((k, float(v)) for k, v in out.items())
-        return Energies((k, float(v)) for k, v in out.items() if k not in LEDGER_ONLY)
+        # The engine holds NaN for what it has not booked since the start.
+        return Energies((k, float(v)) for k, v in out.items()
+                        if k not in LEDGER_ONLY or (self.track_energy and math.isfinite(v)))
 
     def snapshot(self) -> ChargeSnapshot:
         """The particles' state now (copies) with the drum's angle and angular velocity; once
