@@ -118,6 +118,26 @@ def materials_file(scene: Scene) -> str:
             f"{' '.join(friction)}\n")
 
 
+def write_state(sim: Simulation, workdir: Path, stem: str) -> Path:
+    """Writes ``<stem>.data``, ``<stem>_materials.in`` and ``<stem>.vars`` of the simulation's
+    current state into ``workdir`` (made if missing), each atomically; returns the .vars path.
+    The scene must have the yardstick's drum."""
+    scene = sim.scene
+    _check_geometry(scene)
+    workdir.mkdir(parents=True, exist_ok=True)
+    phase = sim.drum_angle + scene.drum.lifters.phase
+    omega = scene.omega
+    _write_atomic(workdir / f"{stem}.data", data_file(sim))
+    _write_atomic(workdir / f"{stem}_materials.in", materials_file(scene))
+    mesh_type = scene.material_index(scene.drum.material) + 1
+    variables = workdir / f"{stem}.vars"
+    _write_atomic(variables,
+                  f"dt={sim.dt:.12g}\nomega={omega:.12g}\nperiod={2 * math.pi / omega:.12g}\n"
+                  f"phase_deg={math.degrees(phase) % 360.0:.9f}\nmesh_type={mesh_type}\n"
+                  f"particles={len(sim.positions)}\n")
+    return variables
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("scene", choices=sorted(bench.SCENES), help="bench scene name")
@@ -132,18 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     _check_geometry(scene)
     path = bench.tumbling_state(args.scene, args.scale, args.spin_up, cache_dir=args.cache_dir)
     sim = Simulation.load(path, threads=1)
-    args.workdir.mkdir(parents=True, exist_ok=True)
-    stem = args.workdir / args.scene
-    phase = sim.drum_angle + scene.drum.lifters.phase
-    omega = scene.omega
-    _write_atomic(stem.with_suffix(".data"), data_file(sim))
-    _write_atomic(args.workdir / f"{args.scene}_materials.in", materials_file(scene))
-    mesh_type = scene.material_index(scene.drum.material) + 1
-    _write_atomic(stem.with_suffix(".vars"),
-                  f"dt={sim.dt:.12g}\nomega={omega:.12g}\nperiod={2 * math.pi / omega:.12g}\n"
-                  f"phase_deg={math.degrees(phase) % 360.0:.9f}\nmesh_type={mesh_type}\n"
-                  f"particles={len(sim.positions)}\n")
-    print(f"wrote {stem}.data ({len(sim.positions)} particles, t = {sim.time:.4f} s), "
+    write_state(sim, args.workdir, args.scene)
+    print(f"wrote {args.scene}.data ({len(sim.positions)} particles, t = {sim.time:.4f} s), "
           f"{args.scene}_materials.in and {args.scene}.vars in {args.workdir}")
     return 0
 

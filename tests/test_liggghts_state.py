@@ -117,3 +117,29 @@ def test_compare_script_refuses_a_bad_repeat(repeat: str, message: str):
     assert out.returncode == 2
     assert message in out.stderr
     assert "==" not in out.stdout  # refused before any run
+
+
+def test_write_state_writes_the_three_files(liggghts_state, tmp_path):
+    """The .vars file gives LIGGGHTS the state's dt, the rotation period 2 pi / omega and
+    where lifter 0 is (the drum angle plus the lifters' phase, in degrees)."""
+    scene = bench.build_scene("ceramic4", "paper")
+    sim = SimpleNamespace(scene=scene, positions=np.zeros((scene.n_particles, 3)) + 0.1,
+                          velocities=np.zeros((scene.n_particles, 3)),
+                          spins=np.zeros((scene.n_particles, 3)), time=1.0, drum_angle=7.0,
+                          dt=2.5e-6)
+    path = liggghts_state.write_state(sim, tmp_path / "w", "s")
+    assert sorted(p.name for p in (tmp_path / "w").iterdir()) == ["s.data", "s.vars",
+                                                                  "s_materials.in"]
+    values = dict(line.split("=") for line in path.read_text().split())
+    assert float(values["dt"]) == 2.5e-6
+    assert float(values["period"]) == pytest.approx(2 * np.pi / scene.omega, rel=1e-11)
+    phase = np.degrees(7.0 + scene.drum.lifters.phase) % 360.0
+    assert float(values["phase_deg"]) == pytest.approx(phase, abs=1e-8)
+    assert values["mesh_type"] == "1"  # steel, the yardstick's mesh type
+    assert int(values["particles"]) == scene.n_particles
+
+
+def test_write_state_refuses_another_drum(liggghts_state, state, tmp_path):
+    with pytest.raises(SystemExit, match="not the yardstick's drum"):
+        liggghts_state.write_state(state, tmp_path, "s")  # the tiny slice, 5 cm long
+    assert not any(tmp_path.iterdir())
