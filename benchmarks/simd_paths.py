@@ -19,12 +19,13 @@ particle_steps_per_s.
 from __future__ import annotations
 
 import argparse
-import csv
+import os
 import statistics
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+import pandas as pd
 from paired_builds import _build_folder, _checkpoint, _positive_int, time_run
 
 
@@ -75,10 +76,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                   f"min {min(ratios):.3f}, max {max(ratios):.3f}")
     if args.csv is not None:
         args.csv.parent.mkdir(parents=True, exist_ok=True)
-        with open(args.csv, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows(rows)
+        tmp = args.csv.with_name(args.csv.name + ".tmp")
+        pd.DataFrame(rows).to_csv(tmp, index=False)
+        os.replace(tmp, args.csv)
     return 0
 
 
