@@ -137,14 +137,17 @@ def run_liggghts(folder: Path, length_s: float, nprocs: int) -> tuple[np.ndarray
         launch = (["mpirun", "--allow-run-as-root", "-np", str(nprocs), "liggghts"]
                   if nprocs > 1 else ["liggghts"])
         with open(folder / "out.liggghts", "w") as log:
-            subprocess.run(launch + [
+            ran = subprocess.run(launch + [
                 "-in", str(ROOT / "benchmarks/liggghts/in.mill_from_state"), "-log", "log.state",
                 "-var", "datafile", "state.data", "-var", "mats", "state_materials.in",
                 "-var", "stl", "mill.stl", "-var", "common", "common_fixes.in",
                 "-var", "dt", v["dt"], "-var", "period", v["period"], "-var", "skin", "0.005",
                 "-var", "px", "1", "-var", "py", "1", "-var", "pz", str(nprocs),
                 "-var", "warmup", "0", "-var", "nsteps", str(steps), "-var", "tag", "liggghts"],
-                cwd=folder, check=True, stdout=log, stderr=subprocess.STDOUT)
+                cwd=folder, stdout=log, stderr=subprocess.STDOUT)
+        if ran.returncode != 0:
+            raise SystemExit(f"error: LIGGGHTS failed (exit {ran.returncode}); see "
+                             f"{folder / 'out.liggghts'} and {folder / 'log.state'}")
         done.touch()
     data = np.loadtxt(out, comments="#", ndmin=2)
     end, mean_on_mesh = data[:, 0], data[:, 2]
@@ -172,6 +175,8 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"--spin-up = {args.spin_up} is not valid; it must be in (0, 20] s")
     if not 0.0 <= args.skip < args.length <= 20.0:
         p.error(f"--skip = {args.skip}, --length = {args.length}: need 0 <= skip < length <= 20 s")
+    if args.seed < 0:
+        p.error(f"--seed = {args.seed} is not valid; it must be >= 0")
     if args.nprocs < 1:
         p.error(f"--nprocs = {args.nprocs} is not valid; it must be >= 1")
     rows = []
