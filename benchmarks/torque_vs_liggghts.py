@@ -23,8 +23,8 @@ so their difference is a difference of two noisy means), and a row per case is a
 its first 0.1 s it reads 4-5 % less torque than millscope from the same state, and the two
 agree from then on.
 
-Each stage's output is kept in ``--workdir``/<case> and reused when present (``--fresh``
-redoes them). LIGGGHTS comes from Debian (``apt-get install liggghts openmpi-bin``); nothing of
+Each stage's output is kept in a folder of ``--workdir`` named by the case, the seed, the
+spin-up and the length, and reused when present (``--fresh`` redoes them). LIGGGHTS comes from Debian (``apt-get install liggghts openmpi-bin``); nothing of
 it is in the package. With the defaults, LIGGGHTS took 8 (balls), 15 (LDMS#1) and 30 (LDMS#3)
 minutes of one core per case, and millscope less than half of that.
 """
@@ -87,14 +87,21 @@ def scene_of(case: str) -> ms.Scene:
     return ms.presets.pilot_mill(SPEED_FRACTION, "ceramic", int(case), scale="paper")
 
 
+def case_folder(workdir: Path, case: str, seed: int, spin_up_s: float, length_s: float) -> Path:
+    """The folder of a case's stages, named by everything they depend on, so that a call with
+    other settings never reuses them."""
+    name = "balls" if case == "balls" else f"LDMS{case}"
+    return workdir / f"{name}-seed{seed}-spin{spin_up_s:g}s-length{length_s:g}s"
+
+
 def prepare(case: str, folder: Path, spin_up_s: float, seed: int) -> Path:
     """Stage 1: the state after the spin-up, and its LIGGGHTS files."""
     checkpoint = folder / "state.npz"
     if not checkpoint.exists():
         sim = Simulation(scene_of(case), seed=seed, threads=1, adapt_threads=False)
         sim.run(spin_up_s, sample_dt=SAMPLE_DT_S, sampling="mean", progress=False)
-        sim.save(checkpoint)
         liggghts_state.write_state(sim, folder, "state")
+        sim.save(checkpoint)  # last: a checkpoint means the stage is complete
     return checkpoint
 
 
@@ -181,26 +188,27 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"--nprocs = {args.nprocs} is not valid; it must be >= 1")
     rows = []
     for case in args.cases:
-        folder = args.workdir / (case if case == "balls" else f"LDMS{case}")
+        folder = case_folder(args.workdir, case, args.seed, args.spin_up, args.length)
         if args.fresh and folder.exists():
             shutil.rmtree(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        print(f"== {folder.name}: state after {args.spin_up} s", flush=True)
+        name = "balls" if case == "balls" else f"LDMS{case}"
+        print(f"== {name}: state after {args.spin_up} s", flush=True)
         prepare(case, folder, args.spin_up, args.seed)
-        print(f"== {folder.name}: millscope, {args.length} s", flush=True)
+        print(f"== {name}: millscope, {args.length} s", flush=True)
         ours = block_mean(*run_millscope(folder, args.length), args.skip)
-        print(f"== {folder.name}: LIGGGHTS, {args.length} s on {args.nprocs} process(es)",
+        print(f"== {name}: LIGGGHTS, {args.length} s on {args.nprocs} process(es)",
               flush=True)
         theirs = block_mean(*run_liggghts(folder, args.length, args.nprocs), args.skip)
         diff = 100.0 * (ours.value / theirs.value - 1.0)
         diff_se = 100.0 * ours.value / theirs.value * math.hypot(
             ours.standard_error / ours.value, theirs.standard_error / theirs.value)
-        print(f"{folder.name}: millscope {ours.value:.1f} ± {ours.standard_error:.1f} N m, "
+        print(f"{name}: millscope {ours.value:.1f} ± {ours.standard_error:.1f} N m, "
               f"LIGGGHTS {theirs.value:.1f} ± {theirs.standard_error:.1f} N m, "
               f"millscope - LIGGGHTS {diff:+.2f} % ± {diff_se:.2f} %", flush=True)
         rows.append({
             "utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-            "case": folder.name, "particles": scene_of(case).n_particles, "seed": args.seed,
+            "case": name, "particles": scene_of(case).n_particles, "seed": args.seed,
             "spin_up_s": args.spin_up, "window_s": f"{args.skip}-{args.length}",
             "millscope_torque_Nm": round(ours.value, 2),
             "millscope_se_Nm": round(ours.standard_error, 2),

@@ -67,3 +67,16 @@ def test_a_bad_case_is_refused_before_any_work(tvl, tmp_path, capsys):
     assert exit_info.value.code == 2
     assert "'8' is not valid; each must be balls or a level 1-7" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+def test_each_setting_has_its_own_folder(tvl, tmp_path):
+    """Stage outputs are reused only by a call with the same case, seed, spin-up and length."""
+    base = tvl.case_folder(tmp_path, "1", 0, 1.0, 1.5)
+    others = [tvl.case_folder(tmp_path, "2", 0, 1.0, 1.5),
+              tvl.case_folder(tmp_path, "balls", 0, 1.0, 1.5),
+              tvl.case_folder(tmp_path, "1", 1, 1.0, 1.5),
+              tvl.case_folder(tmp_path, "1", 0, 2.0, 1.5),
+              tvl.case_folder(tmp_path, "1", 0, 1.0, 6.0)]
+    assert base == tvl.case_folder(tmp_path, "1", 0, 1.0, 1.5)
+    assert len({base, *others}) == 6
+    assert all(f.parent == tmp_path for f in [base, *others])
