@@ -65,7 +65,9 @@ class SyntheticExecutor:
         self.fail = set(fail)
         self.submitted = 0
 
-    def submit(self, fn: Any, case_dict: dict[str, Any]) -> Future:
+    def submit(self, fn: Any, case_dict: dict[str, Any], *_where: Any) -> Future:
+        """``fn(case_dict, *_where)`` made up: ``_where`` (where a case saves its progress)
+        does not matter to a record that is not simulated."""
         self.submitted += 1
         case = Case.from_dict(case_dict)
         s = case.settings

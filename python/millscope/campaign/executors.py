@@ -19,11 +19,13 @@ import time
 import traceback
 import types
 from collections.abc import Callable, Iterator, Mapping
+from pathlib import Path
 from typing import Any
 
 from ..engine.simulation import Simulation
 from ..signal.record import TorqueRecord
 from .cases import Case
+from .partial import CHECKPOINT_EVERY_S, case_simulation, simulate_resumable
 
 __all__ = ["run_case", "simulate_case"]
 
@@ -114,22 +116,28 @@ def simulate_case(case: Case, *, track_energy: bool = False,
         is shorter and its ``meta["interrupted"]`` is true.
     """
     s = case.settings
-    sim = Simulation(case.scene, seed=s.seed, dt=s.dt, threads=s.threads,
-                     settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
-                     settle_max_s=s.settle_max_s, track_energy=track_energy)
+    sim = case_simulation(case, track_energy=track_energy)
     rec = sim.run(s.total_samples * s.sample_dt, sample_dt=s.sample_dt,
                   sampling=s.sampling,
                   progress=progress)
     return sim, rec
 
 
-def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
+def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
+             checkpoint_every_s: float = CHECKPOINT_EVERY_S) -> dict[str, Any]:
     """Runs one case where it is called (a worker); never raises for a failing case.
 
     Parameters
     ----------
     case : mapping
         :meth:`Case.to_dict` (plain data, so any executor can ship it).
+    partial_dir : str, optional
+        A folder for in-case checkpoints (:mod:`millscope.campaign.partial`): the case goes on
+        from what a killed run of it saved there, and saves its own progress there every
+        ``checkpoint_every_s`` s of wall time. None: the case runs from the start, saving
+        nothing.
+    checkpoint_every_s : float
+        Wall-clock time between two in-case checkpoints, s, >= 0.
 
     Returns
     -------
@@ -147,7 +155,12 @@ def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
         s = c.settings
         # A case keeps the torque alone: the energy ledger would cost a quarter of the run
         # and change nothing in it (Simulation, track_energy).
-        sim, rec = simulate_case(c)
+        if partial_dir is None:
+            sim, rec = simulate_case(c)
+            wall = None
+        else:
+            sim, rec, wall = simulate_resumable(c, Path(partial_dir),
+                                                checkpoint_every_s=checkpoint_every_s)
         if rec.meta.get("interrupted") or len(rec) != s.total_samples:
             raise RuntimeError(f"the run was interrupted after {len(rec)} of "
                                f"{s.total_samples} samples")
@@ -156,7 +169,7 @@ def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
         meta["settle"] = None if settle is None else dataclasses.asdict(settle)
         return {"status": "done", "hash": digest, "time_s": rec.time_s[s.warm_up_samples:],
                 "torque_Nm": rec.torque_Nm[s.warm_up_samples:], "meta": meta,
-                "wall_time_s": time.perf_counter() - start, **where}
+                "wall_time_s": time.perf_counter() - start if wall is None else wall, **where}
     except Exception as exc:  # a failing case is reported, not raised
         return {"status": "failed", "hash": digest, "error": f"{type(exc).__name__}: {exc}",
                 "traceback": _traceback_summary(exc),

@@ -12,6 +12,9 @@ directory::
                              case and how it ran in meta["campaign"]
       cases/<hash>.failed.json   a case that raised: the error and a traceback summary
       .lock                  held (flock) while a campaign runs on the store
+      partial/<hash>.*.npz   a running case's in-case checkpoint (samples so far, state),
+                             written every ``checkpoint_every_s`` s of wall time and deleted
+                             once the case is stored (:mod:`millscope.campaign.partial`)
 
 ``<hash>`` is :meth:`Case.hash`: the sha256 of the canonical JSON of the case (scene,
 settings, :data:`CASE_FORMAT`), the same in every process and on every machine, different as
@@ -21,7 +24,7 @@ Every file is written atomically (a temporary file, then a rename), and only the
 called :meth:`Campaign.run` writes: workers return their record, so a dask cluster needs no
 shared file system. The files are the truth; the manifest is rebuilt from them at every start,
 so a campaign killed at any point resumes where it stopped and keeps every case whose file was
-written; a case file that cannot be read (:func:`unreadable_cases` says why) is computed again.
+written, and a long case killed half-way goes on from its last in-case checkpoint; a case file that cannot be read (:func:`unreadable_cases` says why) is computed again.
 The local pool's workers do not run the caller's main module (no ``__main__`` guard needed)
 and end when the campaign process ends, even when it is killed. A rerun skips finished cases
 and retries failed ones; a case that raises is recorded as failed and the others go on. Ctrl-C
@@ -65,6 +68,7 @@ from .executors import (
     _WorkerContext,
     run_case,
 )
+from .partial import CHECKPOINT_EVERY_S, PARTIAL_DIR, PartialFiles
 from .store import (
     _case_path,
     _entry,
@@ -291,7 +295,8 @@ class Campaign:
 
     # -- running -------------------------------------------------------------------------------
     def run(self, executor: Any = None, *, max_workers: int | None = None,
-            progress: bool = True, retry_failed: bool = True) -> CaseResults:
+            progress: bool = True, retry_failed: bool = True,
+            checkpoint_every_s: float | None = CHECKPOINT_EVERY_S) -> CaseResults:
         """Runs every case not yet finished in the store, then returns all results.
 
         Parameters
@@ -312,6 +317,14 @@ class Campaign:
             Show a tqdm bar over the cases.
         retry_failed : bool
             Run cases that failed before again (else they keep their failure).
+        checkpoint_every_s : float or None
+            Wall-clock time between two in-case checkpoints of a running case, s, >= 0
+            (default 600): each case saves its progress in ``<store>/partial`` and a campaign
+            killed in the middle of a long case goes on from there when run again, with the
+            same record to the bit (:mod:`millscope.campaign.partial`). The files of a case
+            are deleted once it is stored. None: cases save nothing and a killed case starts
+            again. With a remote executor the workers save where they see this path; a worker
+            that cannot write there warns and runs on without saving.
 
         Returns
         -------
@@ -337,6 +350,10 @@ class Campaign:
             if max_workers is not None:
                 raise _checks.fail("max_workers", max_workers,
                                    "None when an executor is given (it applies to the local pool)")
+        if checkpoint_every_s is not None:
+            _checks.number("checkpoint_every_s", checkpoint_every_s, ValueError, low=0.0,
+                           unit="s", why="wall-clock time between two in-case checkpoints, "
+                           "or None for none")
         cores = _available_cores()
         if max_workers is not None:
             _checks.integer("max_workers", max_workers, ValueError, low=1)
@@ -361,7 +378,8 @@ class Campaign:
                     or (retry_failed and entries[d]["status"] == "failed")]
             _write_manifest(self._store, entries, self._analysis)
             if todo:
-                self._execute(todo, entries, executor, max_workers, cores, progress)
+                self._execute(todo, entries, executor, max_workers, cores, progress,
+                              checkpoint_every_s)
         return self.results()
 
     def _entries(self, on_disk: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
@@ -377,7 +395,8 @@ class Campaign:
         return entries
 
     def _execute(self, todo: list[int], entries: dict[str, dict[str, Any]], executor: Any,
-                 max_workers: int | None, cores: int, progress: bool) -> None:
+                 max_workers: int | None, cores: int, progress: bool,
+                 checkpoint_every_s: float | None) -> None:
         pool = None
         if executor is None:
             from concurrent.futures import ProcessPoolExecutor
@@ -392,8 +411,11 @@ class Campaign:
         done_before = sum(1 for d in self._hashes if entries[d]["status"] == "done")
         try:
             with _bar(progress, len(self._cases), done_before) as bar:
+                partial = (None if checkpoint_every_s is None
+                           else str(self._store / PARTIAL_DIR))
                 for k in todo:
-                    futures[executor.submit(run_case, self._cases[k].to_dict())] = k
+                    futures[executor.submit(run_case, self._cases[k].to_dict(), partial,
+                                            checkpoint_every_s or 0.0)] = k
                 for future in _completed(executor, list(futures), bar.refresh):
                     k = futures[future]
                     try:
@@ -441,6 +463,7 @@ class Campaign:
             TorqueRecord(outcome["time_s"], outcome["torque_Nm"], meta).save(path)
             with contextlib.suppress(FileNotFoundError):
                 failure.unlink()
+            PartialFiles(self._store / PARTIAL_DIR, digest).remove()
             return _entry(info, "done", path, self._store)
         info["error"] = outcome.get("error")
         info["traceback"] = outcome.get("traceback")

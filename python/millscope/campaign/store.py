@@ -18,6 +18,7 @@ from .._files import atomic_write, read_json
 from ..signal.analysis import AnalysisSettings
 from ..signal.record import RecordError, TorqueRecord
 from .cases import Case, Status
+from .partial import PARTIAL_DIR
 
 __all__ = ["MANIFEST_FORMAT", "UnreadableCase", "read_manifest", "unreadable_cases"]
 
@@ -303,7 +304,7 @@ def _locked(store: Path) -> Iterator[None]:
 
 def _remove_temporaries(store: Path) -> None:
     """Deletes what atomic writes of a killed campaign left (``.<name>.<random>.tmp``)."""
-    for folder in (store, store / "cases"):
+    for folder in (store, store / "cases", store / PARTIAL_DIR):
         if folder.is_dir():
             for tmp in folder.glob(".*.tmp"):
                 with contextlib.suppress(FileNotFoundError):

@@ -1,0 +1,268 @@
+"""A long case that goes on where a killed run stopped: in-case checkpoints.
+
+A paper-scale case can take hours of one core (a 14 s LDMS #4 case is about 1e11
+particle-steps). A case that a campaign runs with a *partial folder* (``<store>/partial``, see
+:class:`~millscope.campaign.Campaign`) saves, every ``checkpoint_every_s`` s of wall-clock
+time, two files there:
+
+* ``<hash>.samples.npz``: the torque samples taken so far, the wall-clock time spent on the
+  case and how its settling went;
+* ``<hash>.checkpoint.npz``: the simulation's full state
+  (:meth:`~millscope.simulation.Simulation.save`).
+
+The samples are written first and the checkpoint second, each atomically, so the checkpoint
+never holds a later state than the samples: a run killed between the two leaves samples the
+checkpoint has not reached, which the resumed run drops. A rerun of the case loads both and
+runs on; because the engine is deterministic and samples on a fixed grid from the start of
+rotation, the resumed record is the same to the bit as that of a run that was never stopped
+(``tests/test_partial_runs.py``). Files that cannot be read, that belong to another millscope
+version or disagree with each other are set aside with a warning and the case starts afresh:
+they are a cache, never an input the result depends on.
+
+The campaign deletes a case's partial files once its finished record is stored; the folder
+holds a ``.gitignore`` so that a store committed to git never takes them in.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import json
+import math
+import time
+import warnings
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._files import atomic_write
+from ..engine.simulation import CheckpointError, SettleReport, Simulation
+from ..signal.record import TorqueRecord
+from .cases import Case
+
+__all__ = ["CHECKPOINT_EVERY_S", "PARTIAL_DIR", "PartialFiles", "case_simulation",
+           "simulate_resumable"]
+
+#: The folder of a store that holds the in-case checkpoints of unfinished cases.
+PARTIAL_DIR = "partial"
+#: Default wall-clock time between two in-case checkpoints, s. A paper-scale checkpoint is a
+#: few MB written in well under a second, so saving every 10 minutes costs nothing measurable
+#: and a kill loses at most 10 minutes of the case.
+CHECKPOINT_EVERY_S = 600.0
+#: Samples per engine run between two looks at the clock: at most about a minute of an LDMS #4
+#: case on one core, a few milliseconds of a tiny one.
+_SEGMENT_SAMPLES = 10
+_FORMAT = "millscope-partial-1"
+_MAX_META_BYTES = 64 * 1024
+
+
+@dataclass(frozen=True)
+class PartialFiles:
+    """The two files of one unfinished case in a partial folder."""
+
+    folder: Path
+    digest: str
+
+    @property
+    def samples(self) -> Path:
+        """The samples taken so far, the wall time spent and the settle report."""
+        return self.folder / f"{self.digest}.samples.npz"
+
+    @property
+    def checkpoint(self) -> Path:
+        """The simulation's state (:meth:`Simulation.save`)."""
+        return self.folder / f"{self.digest}.checkpoint.npz"
+
+    def remove(self) -> None:
+        """Deletes both files (those that exist)."""
+        for path in (self.samples, self.checkpoint):
+            with contextlib.suppress(FileNotFoundError):
+                path.unlink()
+
+
+@dataclass
+class _Progress:
+    """What a case has done so far: its samples (s, N m), the wall time spent on it (s) and how
+    its settling went."""
+
+    time_s: NDArray[np.float64]
+    torque_Nm: NDArray[np.float64]
+    wall_time_s: float
+    settle: SettleReport | None
+
+
+def case_simulation(case: Case, *, track_energy: bool = False) -> Simulation:
+    """A new, empty :class:`~millscope.simulation.Simulation` of ``case``: its scene, seed,
+    time step, threads and settling criteria."""
+    s = case.settings
+    return Simulation(case.scene, seed=s.seed, dt=s.dt, threads=s.threads,
+                      settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
+                      settle_max_s=s.settle_max_s, track_energy=track_energy)
+
+
+def _prepare_folder(folder: Path) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    ignore = folder / ".gitignore"
+    if not ignore.exists():
+        with atomic_write(ignore, "w") as fh:
+            fh.write("# in-case checkpoints of unfinished cases: a cache, never committed\n*\n")
+
+
+def _save(files: PartialFiles, sim: Simulation, done: _Progress) -> None:
+    """Writes the samples, then the checkpoint (the order the module docstring relies on)."""
+    _prepare_folder(files.folder)
+    meta = {"format": _FORMAT, "hash": files.digest, "wall_time_s": done.wall_time_s,
+            "settle": None if done.settle is None else dataclasses.asdict(done.settle)}
+    with atomic_write(files.samples, "wb") as fh:
+        np.savez(fh, allow_pickle=False, meta_json=np.array(json.dumps(meta)),
+                 time_s=done.time_s, torque_Nm=done.torque_Nm)
+    sim.save(files.checkpoint)
+
+
+def _read_samples(files: PartialFiles) -> _Progress:
+    """The samples file, checked field by field; ValueError saying what is wrong."""
+    with zipfile.ZipFile(files.samples) as zf:
+        names = sorted(zf.namelist())
+        if names != ["meta_json.npy", "time_s.npy", "torque_Nm.npy"]:
+            raise ValueError(f"it holds {names}, not meta_json, time_s and torque_Nm")
+        for info in zf.infolist():
+            if info.file_size > _MAX_META_BYTES + 8 * 10**7:
+                raise ValueError(f"its member {info.filename} is {info.file_size} bytes")
+    with np.load(files.samples, allow_pickle=False) as data:
+        meta = json.loads(str(data["meta_json"][()]))
+        t = np.asarray(data["time_s"])
+        y = np.asarray(data["torque_Nm"])
+    if not isinstance(meta, dict) or meta.get("format") != _FORMAT:
+        raise ValueError(f"its format is not {_FORMAT!r}")
+    if meta.get("hash") != files.digest:
+        raise ValueError(f"it belongs to case {meta.get('hash')!r}")
+    if t.dtype != np.float64 or y.dtype != np.float64 or t.ndim != 1 or t.shape != y.shape:
+        raise ValueError("its samples are not two float64 arrays of one length")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+        raise ValueError("its samples are not all finite")
+    wall = meta.get("wall_time_s")
+    if not isinstance(wall, (int, float)) or isinstance(wall, bool) or not \
+            (math.isfinite(wall) and wall >= 0):
+        raise ValueError(f"its wall_time_s = {wall!r} is not a time >= 0")
+    settle = meta.get("settle")
+    report = None
+    if settle is not None:
+        if not isinstance(settle, dict) or set(settle) != {f.name for f in
+                                                            dataclasses.fields(SettleReport)}:
+            raise ValueError("its settle report is not one")
+        report = SettleReport(float(settle["time_s"]), float(settle["kinetic_energy_ratio"]),
+                              bool(settle["converged"]))
+    return _Progress(t, y, float(wall), report)
+
+
+def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | None:
+    """The simulation and samples a killed run of ``case`` left, or None (nothing usable: any
+    files there are deleted, with a warning saying why)."""
+    if not files.checkpoint.exists():
+        files.remove()  # samples without a checkpoint: the first save was cut short
+        return None
+    s = case.settings
+    try:
+        done = _read_samples(files)
+        sim = Simulation.load(files.checkpoint, threads=s.threads)
+        if (sim.scene.to_dict() != case.scene.to_dict() or sim.seed != s.seed
+                or (s.dt is not None and sim.dt != s.dt)):
+            raise ValueError("its checkpoint holds another scene, seed or time step")
+        if sim.phase not in ("settled", "rotating"):
+            raise ValueError(f"its checkpoint is {sim.phase}, not settled or rotating")
+        taken = round(sim.time / s.sample_dt)
+        expected = s.sample_dt * np.arange(1, taken + 1)
+        if (len(done.time_s) < taken or taken >= s.total_samples
+                or not np.allclose(done.time_s[:taken], expected, rtol=0, atol=sim.dt)):
+            raise ValueError(f"its checkpoint is at sample {taken}; its samples file holds "
+                             f"{len(done.time_s)} samples that do not lead there")
+    except (OSError, ValueError, KeyError, CheckpointError, zipfile.BadZipFile) as exc:
+        warnings.warn(f"the partial run of case {files.digest[:12]} in {files.folder} cannot "
+                      f"be continued ({exc}); the case starts afresh", RuntimeWarning,
+                      stacklevel=3)
+        files.remove()
+        return None
+    sim.settle_report = done.settle
+    done.time_s, done.torque_Nm = done.time_s[:taken], done.torque_Nm[:taken]
+    return sim, done
+
+
+def simulate_resumable(case: Case, folder: Path, *,
+                       checkpoint_every_s: float = CHECKPOINT_EVERY_S,
+                       ) -> tuple[Simulation, TorqueRecord, float]:
+    """Runs ``case`` (fill, settle, the whole ``duration_s``) from where a killed run left it
+    in ``folder``, saving its progress there every ``checkpoint_every_s`` s of wall time.
+
+    Parameters
+    ----------
+    case : Case
+    folder : Path
+        The partial folder (made if missing).
+    checkpoint_every_s : float
+        Wall-clock time between two saves, s, >= 0 (0: after every few samples). A save that
+        fails (a full disk, a folder not writable) warns once and the run goes on without
+        saving.
+
+    Returns
+    -------
+    (Simulation, TorqueRecord, float)
+        The simulation after the run, the record of every sample since the start of rotation
+        (as :func:`~millscope.campaign.simulate_case` returns it) and the wall time spent on
+        the case in every run of it, s. Interrupted with Ctrl-C, the record is shorter and its
+        ``meta["interrupted"]`` is true; what was saved stays for the next run.
+    """
+    s = case.settings
+    files = PartialFiles(Path(folder), case.hash())
+    start = time.perf_counter()
+    resumed = _resume(case, files)
+    if resumed is None:
+        sim = case_simulation(case)
+        done = _Progress(np.empty(0), np.empty(0), 0.0, None)
+    else:
+        sim, done = resumed
+    spent_before = done.wall_time_s
+    saving = True
+    last_save = start
+
+    def save() -> None:
+        nonlocal saving, last_save
+        done.wall_time_s = spent_before + time.perf_counter() - start
+        try:
+            _save(files, sim, done)
+        except OSError as exc:
+            warnings.warn(f"case {files.digest[:12]}: its progress cannot be saved in "
+                          f"{files.folder} ({exc}); it runs on without in-case checkpoints",
+                          RuntimeWarning, stacklevel=3)
+            saving = False
+        last_save = time.perf_counter()
+
+    if sim.phase in ("empty", "filled"):
+        done.settle = sim.settle(progress=False)
+        if saving and time.perf_counter() - last_save >= checkpoint_every_s:
+            save()
+    times, torques = [done.time_s], [done.torque_Nm]
+    taken = len(done.time_s)
+    interrupted = False
+    meta: dict[str, object] = {}
+    while taken < s.total_samples and not interrupted:
+        left = s.total_samples - taken
+        count = left if left < 2 * _SEGMENT_SAMPLES else _SEGMENT_SAMPLES
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # the interruption is reported
+            rec = sim.run(count * s.sample_dt, sample_dt=s.sample_dt, sampling=s.sampling,
+                          progress=False)
+        times.append(rec.time_s)
+        torques.append(rec.torque_Nm)
+        taken += len(rec)
+        meta = rec.meta
+        interrupted = bool(meta.get("interrupted"))
+        if saving and not interrupted and taken < s.total_samples and \
+                time.perf_counter() - last_save >= checkpoint_every_s:
+            done.time_s, done.torque_Nm = np.concatenate(times), np.concatenate(torques)
+            times, torques = [done.time_s], [done.torque_Nm]
+            save()
+    wall = spent_before + time.perf_counter() - start
+    return sim, TorqueRecord(np.concatenate(times), np.concatenate(torques), meta), wall

@@ -1,0 +1,154 @@
+"""In-case checkpoints: a case continued from what a killed run saved gives the record of a
+run that was never stopped, to the bit; unusable files are set aside, never trusted.
+
+Cases are the balls-only tiny pilot mill (391 balls), settled for 0.05 s and run for 0.3 s.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import millscope as ms
+from millscope.campaign import Case, RunSettings, run_case
+from millscope.campaign.partial import (
+    PARTIAL_DIR,
+    PartialFiles,
+    _Progress,
+    _save,
+    case_simulation,
+)
+
+QUICK = RunSettings(duration_s=0.3, warm_up_s=0.05, settle_tolerance=10.0, settle_min_s=0.05,
+                    settle_max_s=0.1)
+
+
+def tiny_case(sampling: str = "instant") -> Case:
+    return Case(ms.presets.pilot_mill(0.71, None, 1, scale="tiny"),
+                QUICK.replace(sampling=sampling))
+
+
+def killed_after(case: Case, folder: Path, samples: int, extra: int = 0) -> PartialFiles:
+    """What a run killed after ``samples`` samples leaves: its checkpoint there and its
+    samples, with ``extra`` samples more that were saved before the kill hit the checkpoint."""
+    s = case.settings
+    sim = case_simulation(case)
+    report = sim.settle(progress=False)
+    rec = sim.run(samples * s.sample_dt, s.sample_dt, s.sampling, progress=False)
+    files = PartialFiles(folder, case.hash())
+    _save(files, sim, _Progress(rec.time_s, rec.torque_Nm, 1.5, report))
+    if extra:
+        more = sim.run(extra * s.sample_dt, s.sample_dt, s.sampling, progress=False)
+        t = np.concatenate([rec.time_s, more.time_s])
+        y = np.concatenate([rec.torque_Nm, more.torque_Nm])
+        checkpoint = files.checkpoint.read_bytes()
+        _save(files, sim, _Progress(t, y, 1.5, report))
+        files.checkpoint.write_bytes(checkpoint)  # the kill came before the new checkpoint
+    return files
+
+
+@pytest.fixture(scope="module")
+def reference() -> dict[str, dict[str, object]]:
+    """Each sampling mode's case run in one go, saving nothing."""
+    out = {}
+    for sampling in ("instant", "mean"):
+        outcome = run_case(tiny_case(sampling).to_dict())
+        assert outcome["status"] == "done", outcome.get("error")
+        out[sampling] = outcome
+    return out
+
+
+def assert_same_record(outcome: dict[str, object], ref: dict[str, object]) -> None:
+    assert outcome["status"] == "done", outcome.get("error")
+    np.testing.assert_array_equal(outcome["time_s"], ref["time_s"])
+    np.testing.assert_array_equal(outcome["torque_Nm"], ref["torque_Nm"])
+    meta, ref_meta = outcome["meta"], ref["meta"]
+    assert isinstance(meta, dict) and isinstance(ref_meta, dict)
+    assert meta["settle"] == ref_meta["settle"]
+    assert meta["sampling"] == ref_meta["sampling"]
+
+
+@pytest.mark.parametrize("sampling", ["instant", "mean"])
+@pytest.mark.parametrize("samples", [0, 7, 23])
+def test_a_killed_case_goes_on_to_the_same_record(tmp_path: Path, reference: dict, sampling: str,
+                                                  samples: int) -> None:
+    case = tiny_case(sampling)
+    files = killed_after(case, tmp_path, samples) if samples else None
+    if files is None:  # killed right after settling: a checkpoint with no samples
+        sim = case_simulation(case)
+        report = sim.settle(progress=False)
+        files = PartialFiles(tmp_path, case.hash())
+        _save(files, sim, _Progress(np.empty(0), np.empty(0), 1.5, report))
+    outcome = run_case(case.to_dict(), str(tmp_path), checkpoint_every_s=1e9)
+    assert_same_record(outcome, reference[sampling])
+    assert float(outcome["wall_time_s"]) > 1.5  # the time the killed run had spent counts
+
+
+def test_samples_past_the_checkpoint_are_dropped(tmp_path: Path, reference: dict) -> None:
+    case = tiny_case()
+    killed_after(case, tmp_path, 11, extra=5)
+    outcome = run_case(case.to_dict(), str(tmp_path), checkpoint_every_s=1e9)
+    assert_same_record(outcome, reference["instant"])
+
+
+def test_saving_at_every_segment_changes_nothing(tmp_path: Path, reference: dict) -> None:
+    outcome = run_case(tiny_case("mean").to_dict(), str(tmp_path), checkpoint_every_s=0.0)
+    assert_same_record(outcome, reference["mean"])
+    files = PartialFiles(tmp_path, tiny_case("mean").hash())
+    assert files.checkpoint.exists() and files.samples.exists()  # the campaign deletes them
+
+
+@pytest.mark.parametrize("damage", ["checkpoint", "samples", "other_case", "no_checkpoint"])
+def test_unusable_files_are_set_aside(tmp_path: Path, reference: dict, damage: str) -> None:
+    case = tiny_case()
+    files = killed_after(case, tmp_path, 9)
+    if damage == "checkpoint":
+        data = bytearray(files.checkpoint.read_bytes())
+        data[len(data) // 2] ^= 0xFF
+        files.checkpoint.write_bytes(bytes(data))
+    elif damage == "samples":
+        files.samples.write_bytes(b"not a zip")
+    elif damage == "other_case":
+        with np.load(files.samples) as z:
+            meta = json.loads(str(z["meta_json"][()]))
+            t, y = z["time_s"], z["torque_Nm"]
+        meta["hash"] = "0" * 64
+        np.savez(files.samples, meta_json=np.array(json.dumps(meta)), time_s=t, torque_Nm=y)
+    else:
+        files.checkpoint.unlink()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        outcome = run_case(case.to_dict(), str(tmp_path), checkpoint_every_s=1e9)
+    assert_same_record(outcome, reference["instant"])
+    assert float(outcome["wall_time_s"]) < float(reference["instant"]["wall_time_s"]) * 20
+    said = [str(w.message) for w in caught if "starts afresh" in str(w.message)]
+    assert len(said) == (0 if damage == "no_checkpoint" else 1)
+    if said:
+        assert case.hash()[:12] in said[0]
+
+
+def test_a_campaign_deletes_a_stored_case_s_partial_files(tmp_path: Path) -> None:
+    store = tmp_path / "store"
+    camp = ms.Campaign([tiny_case().scene], store, settings=QUICK, block=(0.1, 0.3))
+    killed_after(camp.cases[0], store / PARTIAL_DIR, 12)
+    fresh = ms.Campaign([tiny_case().scene], tmp_path / "fresh", settings=QUICK,
+                        block=(0.1, 0.3))
+    ran = camp.run(max_workers=1, progress=False, checkpoint_every_s=0.0)
+    ref = fresh.run(max_workers=1, progress=False, checkpoint_every_s=None)
+    assert ran[0].energy == ref[0].energy and ran[0].mean_torque == ref[0].mean_torque
+    left = sorted(p.name for p in (store / PARTIAL_DIR).iterdir())
+    assert left == [".gitignore"]
+    assert (store / PARTIAL_DIR / ".gitignore").read_text().splitlines()[-1] == "*"
+    assert not (tmp_path / "fresh" / PARTIAL_DIR).exists()
+
+
+@pytest.mark.parametrize("bad", [-1.0, float("nan"), "600"])
+def test_a_bad_checkpoint_interval_is_refused_before_any_work(tmp_path: Path, bad: object) -> None:
+    camp = ms.Campaign([tiny_case().scene], tmp_path / "store", settings=QUICK, block=None)
+    with pytest.raises(ValueError, match="checkpoint_every_s"):
+        camp.run(progress=False, checkpoint_every_s=bad)  # type: ignore[arg-type]
+    assert not (tmp_path / "store").exists()
