@@ -38,15 +38,17 @@ def killed_after(case: Case, folder: Path, samples: int, extra: int = 0) -> Part
     s = case.settings
     sim = case_simulation(case)
     report = sim.settle(progress=False)
-    rec = sim.run(samples * s.sample_dt, s.sample_dt, s.sampling, progress=False)
+    done = _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, report)
+    other = "mean" if s.sampling == "instant" else "instant"
+    sim.run(samples * s.sample_dt, s.sample_dt, s.sampling, progress=False)
+    done.extend((sim.last_records[s.sampling], sim.last_records[other]))
     files = PartialFiles(folder, case.hash())
-    _save(files, sim, _Progress(rec.time_s, rec.torque_Nm, 1.5, report))
+    _save(files, sim, done)
     if extra:
-        more = sim.run(extra * s.sample_dt, s.sample_dt, s.sampling, progress=False)
-        t = np.concatenate([rec.time_s, more.time_s])
-        y = np.concatenate([rec.torque_Nm, more.torque_Nm])
+        sim.run(extra * s.sample_dt, s.sample_dt, s.sampling, progress=False)
+        done.extend((sim.last_records[s.sampling], sim.last_records[other]))
         checkpoint = files.checkpoint.read_bytes()
-        _save(files, sim, _Progress(t, y, 1.5, report))
+        _save(files, sim, done)
         files.checkpoint.write_bytes(checkpoint)  # the kill came before the new checkpoint
     return files
 
@@ -66,6 +68,9 @@ def assert_same_record(outcome: dict[str, object], ref: dict[str, object]) -> No
     assert outcome["status"] == "done", outcome.get("error")
     np.testing.assert_array_equal(outcome["time_s"], ref["time_s"])
     np.testing.assert_array_equal(outcome["torque_Nm"], ref["torque_Nm"])
+    assert outcome["other"]["sampling"] == ref["other"]["sampling"]  # type: ignore[index]
+    np.testing.assert_array_equal(outcome["other"]["torque_Nm"],  # type: ignore[index]
+                                  ref["other"]["torque_Nm"])  # type: ignore[index]
     meta, ref_meta = outcome["meta"], ref["meta"]
     assert isinstance(meta, dict) and isinstance(ref_meta, dict)
     assert meta["settle"] == ref_meta["settle"]
@@ -82,7 +87,7 @@ def test_a_killed_case_goes_on_to_the_same_record(tmp_path: Path, reference: dic
         sim = case_simulation(case)
         report = sim.settle(progress=False)
         files = PartialFiles(tmp_path, case.hash())
-        _save(files, sim, _Progress(np.empty(0), np.empty(0), 1.5, report))
+        _save(files, sim, _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, report))
     outcome = run_case(case.to_dict(), str(tmp_path), checkpoint_every_s=1e9)
     assert_same_record(outcome, reference[sampling])
     assert float(outcome["wall_time_s"]) > 1.5  # the time the killed run had spent counts
@@ -115,9 +120,10 @@ def test_unusable_files_are_set_aside(tmp_path: Path, reference: dict, damage: s
     elif damage == "other_case":
         with np.load(files.samples) as z:
             meta = json.loads(str(z["meta_json"][()]))
-            t, y = z["time_s"], z["torque_Nm"]
+            t, y, o = z["time_s"], z["torque_Nm"], z["other_Nm"]
         meta["hash"] = "0" * 64
-        np.savez(files.samples, meta_json=np.array(json.dumps(meta)), time_s=t, torque_Nm=y)
+        np.savez(files.samples, meta_json=np.array(json.dumps(meta)), time_s=t, torque_Nm=y,
+                 other_Nm=o)
     else:
         files.checkpoint.unlink()
     with warnings.catch_warnings(record=True) as caught:
@@ -152,3 +158,27 @@ def test_a_bad_checkpoint_interval_is_refused_before_any_work(tmp_path: Path, ba
     with pytest.raises(ValueError, match="checkpoint_every_s"):
         camp.run(progress=False, checkpoint_every_s=bad)  # type: ignore[arg-type]
     assert not (tmp_path / "store").exists()
+
+
+def test_one_run_gives_both_sampling_modes_to_the_bit(reference: dict) -> None:
+    """The instant case's run carries the mean case's record, equal to the mean case's own."""
+    for mine, other in (("instant", "mean"), ("mean", "instant")):
+        carried = reference[mine]["other"]
+        assert carried["sampling"] == other
+        np.testing.assert_array_equal(carried["torque_Nm"], reference[other]["torque_Nm"])
+    # the two modes differ: the mean of an interval is not the torque of one of its steps
+    assert not np.array_equal(reference["mean"]["torque_Nm"], reference["instant"]["torque_Nm"])
+
+
+def test_a_campaign_runs_two_sampling_twins_once(tmp_path: Path, reference: dict) -> None:
+    cases = [tiny_case("instant"), tiny_case("mean")]
+    camp = ms.Campaign(cases, tmp_path / "store", block=(0.1, 0.3))
+    results = camp.run(max_workers=1, progress=False)
+    assert all(r.ok for r in results)
+    for r, sampling in zip(results, ("instant", "mean"), strict=True):
+        assert r.record is not None and r.record.meta["sampling"] == sampling
+        np.testing.assert_array_equal(r.record.torque_Nm, reference[sampling]["torque_Nm"])
+    # one run: both cases were made by the same worker process in the same time
+    infos = [r.record.meta["campaign"] for r in results if r.record is not None]
+    assert infos[0]["pid"] == infos[1]["pid"]
+    assert infos[0]["wall_time_s"] == infos[1]["wall_time_s"]

@@ -240,14 +240,15 @@ void register_engine(py::module_& m) {
               py::gil_scoped_release release;
               rows = e.advance_sampled(sample_dt, mean, count, max_steps, resume);
             }
-            const auto n = static_cast<py::ssize_t>(rows.size() / 5);
-            return to_numpy(std::move(rows)).reshape({n, static_cast<py::ssize_t>(5)});
+            const auto n = static_cast<py::ssize_t>(rows.size() / 9);
+            return to_numpy(std::move(rows)).reshape({n, static_cast<py::ssize_t>(9)});
           },
           arg("sample_dt"), arg("mean"), arg("count"),
           arg("max_steps") = std::numeric_limits<long>::max(), arg("resume") = false,
           "Steps until `count` torque samples are taken or `max_steps` steps were run; with "
           "`resume`, goes on with the sample under way of the previous call. Rows (t, total, "
-          "shell, lifters, ends).")
+          "shell, lifters, ends) in the mode asked for (`mean`: the interval means, else the "
+          "torque of the step nearest t), then (total, shell, lifters, ends) in the other mode.")
       .def("torque", [](const en::Engine& e) { return torque_dict(e.torque()); })
       .def("ledger",
            [](const en::Engine& e) {

@@ -373,7 +373,10 @@ void Engine::advance(long steps) {
 
 namespace {
 
-/// Takes torque samples at the steps nearest k sample_dt after the start of rotation.
+/// Takes torque samples at the steps nearest k sample_dt after the start of rotation, in both
+/// modes at once: the torque of that step and the mean over the steps of its interval. A row
+/// holds the time, the sample in the call's mode, then the sample in the other mode, so one run
+/// gives the record of each (the paper's instantaneous samples and the anti-aliased means).
 class Sampler final : public StepObserver {
  public:
   Sampler(double dt, long rotation_start, const SamplingState& state)
@@ -390,7 +393,7 @@ class Sampler final : public StepObserver {
     const long offset = step - rotation_start_;
     // The mean of sample k covers exactly the steps ending in (t_(k-1), t_k]; a call that
     // starts before that interval runs its first steps without counting them.
-    if (s.mean && offset > target(s.next - 1)) {
+    if (offset > target(s.next - 1)) {
       s.sum.total += t.total;
       s.sum.shell += t.shell;
       s.sum.lifters += t.lifters;
@@ -398,14 +401,15 @@ class Sampler final : public StepObserver {
       ++s.terms;
     }
     if (offset != target(s.next)) return;
-    if (s.mean) {
-      const double w = 1.0 / static_cast<double>(s.terms);
-      record(Torque{s.sum.total * w, s.sum.shell * w, s.sum.lifters * w, s.sum.ends * w});
-      s.sum = Torque{};
-      s.terms = 0;
-    } else {
-      record(t);  // the step nearest t_k
-    }
+    const double w = 1.0 / static_cast<double>(s.terms);
+    const Torque mean{s.sum.total * w, s.sum.shell * w, s.sum.lifters * w, s.sum.ends * w};
+    s.sum = Torque{};
+    s.terms = 0;
+    // `t` is the torque of the step nearest t_k, the instantaneous sample.
+    if (s.mean)
+      record(mean, t);
+    else
+      record(t, mean);
     last_sampled = offset;
   }
 
@@ -413,9 +417,10 @@ class Sampler final : public StepObserver {
   long last_sampled = -1;
 
  private:
-  void record(const Torque& t) {
+  void record(const Torque& t, const Torque& other) {
     out.insert(out.end(), {static_cast<double>(state_.next) * state_.sample_dt, t.total, t.shell,
-                           t.lifters, t.ends});
+                           t.lifters, t.ends, other.total, other.shell, other.lifters,
+                           other.ends});
     ++state_.next;
     --state_.left;
   }

@@ -142,7 +142,9 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
     Returns
     -------
     dict
-        ``status`` "done" with ``time_s``, ``torque_Nm`` (arrays: s, N m) and ``meta``, or
+        ``status`` "done" with ``time_s``, ``torque_Nm`` (arrays: s, N m), ``meta`` and
+        ``other`` (``{"sampling": the other mode, "torque_Nm": its samples}``, taken from the
+        same steps), or
         "failed" with ``error`` and ``traceback``; always ``hash``, ``wall_time_s`` (s),
         ``host`` and ``pid``.
     """
@@ -157,10 +159,12 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
         # and change nothing in it (Simulation, track_energy).
         if partial_dir is None:
             sim, rec = simulate_case(c)
-            wall = None
+            records, wall = sim.last_records, None
         else:
-            sim, rec, wall = simulate_resumable(c, Path(partial_dir),
-                                                checkpoint_every_s=checkpoint_every_s)
+            sim, records, wall = simulate_resumable(c, Path(partial_dir),
+                                                    checkpoint_every_s=checkpoint_every_s)
+            rec = records[s.sampling]
+        other = next(mode for mode in records if mode != s.sampling)
         if rec.meta.get("interrupted") or len(rec) != s.total_samples:
             raise RuntimeError(f"the run was interrupted after {len(rec)} of "
                                f"{s.total_samples} samples")
@@ -169,6 +173,8 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
         meta["settle"] = None if settle is None else dataclasses.asdict(settle)
         return {"status": "done", "hash": digest, "time_s": rec.time_s[s.warm_up_samples:],
                 "torque_Nm": rec.torque_Nm[s.warm_up_samples:], "meta": meta,
+                "other": {"sampling": other,
+                          "torque_Nm": records[other].torque_Nm[s.warm_up_samples:]},
                 "wall_time_s": time.perf_counter() - start if wall is None else wall, **where}
     except Exception as exc:  # a failing case is reported, not raised
         return {"status": "failed", "hash": digest, "error": f"{type(exc).__name__}: {exc}",

@@ -5,7 +5,8 @@ particle-steps). A case that a campaign runs with a *partial folder* (``<store>/
 :class:`~millscope.campaign.Campaign`) saves, every ``checkpoint_every_s`` s of wall-clock
 time, two files there:
 
-* ``<hash>.samples.npz``: the torque samples taken so far, the wall-clock time spent on the
+* ``<hash>.samples.npz``: the torque samples taken so far (in the case's sampling mode and in
+  the other, which the engine takes from the same steps), the wall-clock time spent on the
   case and how its settling went;
 * ``<hash>.checkpoint.npz``: the simulation's full state
   (:meth:`~millscope.simulation.Simulation.save`).
@@ -39,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._files import atomic_write
-from ..engine.simulation import CheckpointError, SettleReport, Simulation
+from ..engine.simulation import CheckpointError, Sampling, SettleReport, Simulation
 from ..signal.record import TorqueRecord
 from .cases import Case
 
@@ -85,13 +86,26 @@ class PartialFiles:
 
 @dataclass
 class _Progress:
-    """What a case has done so far: its samples (s, N m), the wall time spent on it (s) and how
-    its settling went."""
+    """What a case has done so far: its samples (s; N m in the case's sampling mode and in the
+    other), the wall time spent on it (s) and how its settling went."""
 
     time_s: NDArray[np.float64]
     torque_Nm: NDArray[np.float64]
+    other_Nm: NDArray[np.float64]
     wall_time_s: float
     settle: SettleReport | None
+
+    def cut(self, taken: int) -> None:
+        """Keeps the first ``taken`` samples."""
+        self.time_s, self.torque_Nm = self.time_s[:taken], self.torque_Nm[:taken]
+        self.other_Nm = self.other_Nm[:taken]
+
+    def extend(self, records: tuple[TorqueRecord, TorqueRecord]) -> None:
+        """Appends a run's records (the case's sampling mode, the other)."""
+        mine, other = records
+        self.time_s = np.concatenate([self.time_s, mine.time_s])
+        self.torque_Nm = np.concatenate([self.torque_Nm, mine.torque_Nm])
+        self.other_Nm = np.concatenate([self.other_Nm, other.torque_Nm])
 
 
 def case_simulation(case: Case, *, track_energy: bool = False) -> Simulation:
@@ -118,7 +132,7 @@ def _save(files: PartialFiles, sim: Simulation, done: _Progress) -> None:
             "settle": None if done.settle is None else dataclasses.asdict(done.settle)}
     with atomic_write(files.samples, "wb") as fh:
         np.savez(fh, allow_pickle=False, meta_json=np.array(json.dumps(meta)),
-                 time_s=done.time_s, torque_Nm=done.torque_Nm)
+                 time_s=done.time_s, torque_Nm=done.torque_Nm, other_Nm=done.other_Nm)
     sim.save(files.checkpoint)
 
 
@@ -126,8 +140,9 @@ def _read_samples(files: PartialFiles) -> _Progress:
     """The samples file, checked field by field; ValueError saying what is wrong."""
     with zipfile.ZipFile(files.samples) as zf:
         names = sorted(zf.namelist())
-        if names != ["meta_json.npy", "time_s.npy", "torque_Nm.npy"]:
-            raise ValueError(f"it holds {names}, not meta_json, time_s and torque_Nm")
+        if names != ["meta_json.npy", "other_Nm.npy", "time_s.npy", "torque_Nm.npy"]:
+            raise ValueError(f"it holds {names}, not meta_json, time_s, torque_Nm and "
+                             "other_Nm")
         for info in zf.infolist():
             if info.file_size > _MAX_META_BYTES + 8 * 10**7:
                 raise ValueError(f"its member {info.filename} is {info.file_size} bytes")
@@ -135,13 +150,14 @@ def _read_samples(files: PartialFiles) -> _Progress:
         meta = json.loads(str(data["meta_json"][()]))
         t = np.asarray(data["time_s"])
         y = np.asarray(data["torque_Nm"])
+        o = np.asarray(data["other_Nm"])
     if not isinstance(meta, dict) or meta.get("format") != _FORMAT:
         raise ValueError(f"its format is not {_FORMAT!r}")
     if meta.get("hash") != files.digest:
         raise ValueError(f"it belongs to case {meta.get('hash')!r}")
-    if t.dtype != np.float64 or y.dtype != np.float64 or t.ndim != 1 or t.shape != y.shape:
-        raise ValueError("its samples are not two float64 arrays of one length")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+    if any(a.dtype != np.float64 or a.shape != t.shape for a in (y, o)) or t.ndim != 1:
+        raise ValueError("its samples are not three float64 arrays of one length")
+    if not all(np.all(np.isfinite(a)) for a in (t, y, o)):
         raise ValueError("its samples are not all finite")
     wall = meta.get("wall_time_s")
     if not isinstance(wall, (int, float)) or isinstance(wall, bool) or not \
@@ -155,7 +171,7 @@ def _read_samples(files: PartialFiles) -> _Progress:
             raise ValueError("its settle report is not one")
         report = SettleReport(float(settle["time_s"]), float(settle["kinetic_energy_ratio"]),
                               bool(settle["converged"]))
-    return _Progress(t, y, float(wall), report)
+    return _Progress(t, y, o, float(wall), report)
 
 
 def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | None:
@@ -186,13 +202,13 @@ def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | N
         files.remove()
         return None
     sim.settle_report = done.settle
-    done.time_s, done.torque_Nm = done.time_s[:taken], done.torque_Nm[:taken]
+    done.cut(taken)
     return sim, done
 
 
 def simulate_resumable(case: Case, folder: Path, *,
                        checkpoint_every_s: float = CHECKPOINT_EVERY_S,
-                       ) -> tuple[Simulation, TorqueRecord, float]:
+                       ) -> tuple[Simulation, dict[Sampling, TorqueRecord], float]:
     """Runs ``case`` (fill, settle, the whole ``duration_s``) from where a killed run left it
     in ``folder``, saving its progress there every ``checkpoint_every_s`` s of wall time.
 
@@ -208,11 +224,13 @@ def simulate_resumable(case: Case, folder: Path, *,
 
     Returns
     -------
-    (Simulation, TorqueRecord, float)
-        The simulation after the run, the record of every sample since the start of rotation
-        (as :func:`~millscope.campaign.simulate_case` returns it) and the wall time spent on
-        the case in every run of it, s. Interrupted with Ctrl-C, the record is shorter and its
-        ``meta["interrupted"]`` is true; what was saved stays for the next run.
+    (Simulation, dict, float)
+        The simulation after the run; the record of every sample since the start of rotation
+        in each sampling mode, ``"instant"`` and ``"mean"`` (the case's as
+        :func:`~millscope.campaign.simulate_case` returns it, and the other from the same
+        steps); and the wall time spent on the case in every run of it, s. Interrupted with
+        Ctrl-C, the records are shorter and their ``meta["interrupted"]`` is true; what was
+        saved stays for the next run.
     """
     s = case.settings
     files = PartialFiles(Path(folder), case.hash())
@@ -220,7 +238,7 @@ def simulate_resumable(case: Case, folder: Path, *,
     resumed = _resume(case, files)
     if resumed is None:
         sim = case_simulation(case)
-        done = _Progress(np.empty(0), np.empty(0), 0.0, None)
+        done = _Progress(np.empty(0), np.empty(0), np.empty(0), 0.0, None)
     else:
         sim, done = resumed
     spent_before = done.wall_time_s
@@ -243,26 +261,24 @@ def simulate_resumable(case: Case, folder: Path, *,
         done.settle = sim.settle(progress=False)
         if saving and time.perf_counter() - last_save >= checkpoint_every_s:
             save()
-    times, torques = [done.time_s], [done.torque_Nm]
-    taken = len(done.time_s)
+    other: Sampling = "mean" if s.sampling == "instant" else "instant"
     interrupted = False
-    meta: dict[str, object] = {}
-    while taken < s.total_samples and not interrupted:
-        left = s.total_samples - taken
+    metas: dict[Sampling, dict[str, object]] = {}
+    while len(done.time_s) < s.total_samples and not interrupted:
+        left = s.total_samples - len(done.time_s)
         count = left if left < 2 * _SEGMENT_SAMPLES else _SEGMENT_SAMPLES
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # the interruption is reported
-            rec = sim.run(count * s.sample_dt, sample_dt=s.sample_dt, sampling=s.sampling,
-                          progress=False)
-        times.append(rec.time_s)
-        torques.append(rec.torque_Nm)
-        taken += len(rec)
-        meta = rec.meta
-        interrupted = bool(meta.get("interrupted"))
-        if saving and not interrupted and taken < s.total_samples and \
+            sim.run(count * s.sample_dt, sample_dt=s.sample_dt, sampling=s.sampling,
+                    progress=False)
+        records = sim.last_records
+        done.extend((records[s.sampling], records[other]))
+        metas = {mode: rec.meta for mode, rec in records.items()}
+        interrupted = bool(metas[s.sampling].get("interrupted"))
+        if saving and not interrupted and len(done.time_s) < s.total_samples and \
                 time.perf_counter() - last_save >= checkpoint_every_s:
-            done.time_s, done.torque_Nm = np.concatenate(times), np.concatenate(torques)
-            times, torques = [done.time_s], [done.torque_Nm]
             save()
     wall = spent_before + time.perf_counter() - start
-    return sim, TorqueRecord(np.concatenate(times), np.concatenate(torques), meta), wall
+    out = {s.sampling: TorqueRecord(done.time_s, done.torque_Nm, metas[s.sampling]),
+           other: TorqueRecord(done.time_s, done.other_Nm, metas[other])}
+    return sim, out, wall

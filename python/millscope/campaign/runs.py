@@ -162,6 +162,14 @@ class Campaign:
                                  f"({out[k].name}, hash {digest[:12]}); every case must differ "
                                  "in its scene or settings (give other seeds for repeats)")
             first[digest] = k
+        # Case k's twin: the same case in the other sampling mode, which the engine samples
+        # from the same steps, so one run stores both.
+        self._twins: dict[int, int] = {}
+        for k, c in enumerate(out):
+            other = "mean" if c.settings.sampling == "instant" else "instant"
+            twin = first.get(Case(c.scene, c.settings.replace(sampling=other)).hash())
+            if twin is not None:
+                self._twins[k] = twin
 
         path = Path(store)
         if path.exists() and not path.is_dir():
@@ -299,6 +307,10 @@ class Campaign:
             checkpoint_every_s: float | None = CHECKPOINT_EVERY_S) -> CaseResults:
         """Runs every case not yet finished in the store, then returns all results.
 
+        Two cases that differ only in their sampling mode (``"instant"`` and ``"mean"``) run
+        once: the engine takes both kinds of sample from the same steps, so the one run stores
+        both cases, each the same to the bit as if it had run alone.
+
         Parameters
         ----------
         executor : None, concurrent.futures.Executor or dask.distributed.Client
@@ -409,6 +421,15 @@ class Campaign:
             executor = pool
         futures: dict[Any, int] = {}
         done_before = sum(1 for d in self._hashes if entries[d]["status"] == "done")
+        # A case whose twin also runs is stored from the twin's run (the engine samples both
+        # modes at once).
+        riders: dict[int, int] = {}
+        for k in todo:
+            twin = self._twins.get(k)
+            if twin is not None and twin in todo and k not in riders:
+                riders[twin] = k
+        todo = [k for k in todo if k not in riders]
+        carried = {k: twin for twin, k in riders.items()}
         try:
             with _bar(progress, len(self._cases), done_before) as bar:
                 partial = (None if checkpoint_every_s is None
@@ -425,6 +446,11 @@ class Campaign:
                                    "error": f"{type(exc).__name__}: {exc}",
                                    "traceback": _traceback_summary(exc), "wall_time_s": None}
                     entries[self._hashes[k]] = self._store_outcome(k, outcome)
+                    if k in carried:
+                        twin = carried[k]
+                        entries[self._hashes[twin]] = self._store_outcome(
+                            twin, _twin_outcome(outcome, self._hashes[twin]))
+                        bar.update(1)
                     _write_manifest(self._store, entries, self._analysis)
                     bar.update(1)
                     if outcome["status"] == "failed":
@@ -549,6 +575,18 @@ def read_store(store: str | os.PathLike[str], *, block: tuple[float, float] | No
     rows = [case_row(r) for r in campaign.results()]
     rows += unlisted_rows(campaign.store, set(campaign.hashes))
     return frame(CASE_COLUMNS, rows)
+
+
+def _twin_outcome(outcome: Mapping[str, Any], digest: str) -> dict[str, Any]:
+    """The outcome of the twin (case ``digest``, the other sampling mode) of a case's run: its
+    samples in the other mode from the same steps, or the same failure."""
+    if outcome["status"] != "done":
+        return {**outcome, "hash": digest,
+                "error": f"its twin in the other sampling mode, which it runs with, failed: "
+                         f"{outcome.get('error')}"}
+    other = outcome["other"]
+    meta = {**outcome["meta"], "sampling": other["sampling"]}
+    return {**outcome, "hash": digest, "torque_Nm": other["torque_Nm"], "meta": meta}
 
 
 def _number(value: object) -> float:

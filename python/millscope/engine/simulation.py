@@ -238,6 +238,9 @@ class Simulation:
         self.settle_report: SettleReport | None = None
         #: Torque of the drum's parts over the last run, N m: "shell", "lifters", "ends".
         self.last_parts: dict[str, NDArray[np.float64]] = {}
+        #: The last run's record in each sampling mode, "instant" and "mean": the one run()
+        #: returned and the other, sampled from the same steps (the engine takes both at once).
+        self.last_records: dict[Sampling, TorqueRecord] = {}
         #: The VTK series written into each folder (:meth:`write_vtk`, run's snapshots).
         self._series: dict[Path, VtkSeries] = {}
 
@@ -494,8 +497,9 @@ class Simulation:
             ``time_s`` from the start of rotation, ``torque_Nm`` the drive torque (positive
             when the charge resists rotation; docs/architecture.md, Torque); ``meta`` holds the
             scene, dt, seed, rotation frequency, lifter count and sampling mode. The parts (shell,
-            lifters, end walls) are in :attr:`last_parts`. Interrupted with Ctrl-C, the record
-            holds what was sampled and ``meta["interrupted"]`` is true.
+            lifters, end walls) are in :attr:`last_parts`, and the record in the other
+            sampling mode, taken from the same steps, in :attr:`last_records`. Interrupted with
+            Ctrl-C, the record holds what was sampled and ``meta["interrupted"]`` is true.
         """
         if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
             raise ValueError(f"duration = {duration!r} s is not valid; it must be finite and > 0")
@@ -552,10 +556,14 @@ class Simulation:
         if interrupted:
             warnings.warn(f"run interrupted: kept {taken} of {count} samples", RuntimeWarning,
                           stacklevel=2)
-        data = np.concatenate(rows) if rows else np.empty((0, 5))
+        data = np.concatenate(rows) if rows else np.empty((0, 9))
         self.last_parts = {"shell": data[:, 2], "lifters": data[:, 3], "ends": data[:, 4]}
-        meta = self._meta(sample_dt, sampling, interrupted)
-        return TorqueRecord(data[:, 0], data[:, 1], meta)
+        other: Sampling = "instant" if sampling == "mean" else "mean"
+        self.last_records = {
+            sampling: TorqueRecord(data[:, 0], data[:, 1],
+                                   self._meta(sample_dt, sampling, interrupted)),
+            other: TorqueRecord(data[:, 0], data[:, 5], self._meta(sample_dt, other, interrupted))}
+        return self.last_records[sampling]
 
     def _snapshot_into(self, series: VtkSeries) -> VtkSeries | None:
         """Adds the state now to ``series``; None (no more snapshots) when it cannot be
