@@ -29,6 +29,7 @@ from millscope.campaign.studies import (
     save_study_plan,
 )
 from millscope.model.presets import SCALE_BIAS, pilot_mill
+from millscope.report.reports import write_study
 from millscope.signal.record import TorqueRecord
 
 from .test_studies import SHORT, _fake_runs
@@ -105,12 +106,45 @@ def test_a_partial_study_leaves_out_unfinished_settings_but_not_the_reference() 
     result = StudyResult.from_runs(plan, some, partial=True)
     assert result.settings == plan.settings[:2]
     assert result.pending == (plan.settings[2],)
-    assert "Not finished yet (left out): " + plan.settings[2].label in result.to_markdown()
+    assert ("Not finished yet (only their finished levels are shown, and they stay off the "
+            "Pareto front): " + plan.settings[2].label) in result.to_markdown()
     with pytest.raises(ValueError, match="runs lack setting 2"):
         StudyResult.from_runs(plan, some)
     no_ref = [r for r in runs if r.setting != plan.reference_index]
     with pytest.raises(ValueError, match="the reference: nothing to compare with yet"):
         StudyResult.from_runs(plan, no_ref, partial=True)
+
+
+def test_a_partial_study_shows_the_levels_finished_with_the_reference(tmp_path) -> None:
+    """Two levels: the reference and a setting finished at level 1 only are compared there;
+    the per-unit energy, which needs both levels, is left empty, and neither is a point of
+    the Pareto front yet."""
+    plan = StudyPlan.ladder("dt_fraction", [0.1, 0.2, 0.3], base=SHORT, seeds=(0, 1),
+                            particles="ceramic", load_levels=(1, 2))
+    runs = _fake_runs(plan, np.random.default_rng(7))
+    some = [r for r in runs if not (r.setting in (0, 1) and r.load_level == 2)]
+    result = StudyResult.from_runs(plan, some, partial=True)
+    levels = {(plan.settings.index(r.setting), r.load_level) for r in result.rows}
+    assert levels == {(0, 1), (1, 1), (2, 1)}  # level 2 lacks the reference (setting 0)
+    assert result.pending == (plan.settings[0], plan.settings[1])
+    ref = plan.reference_index
+    by = {(r.setting, r.load_level, r.seed): r for r in some}
+    for row in result.rows:
+        k = plan.settings.index(row.setting)
+        e = np.array([by[(k, 1, s)].energy for s in plan.seeds])
+        e_ref = np.array([by[(ref, 1, s)].energy for s in plan.seeds])
+        assert row.quantities["energy"].error == pytest.approx(
+            (e.mean() - e_ref.mean()) / e_ref.mean())
+        assert math.isnan(row.quantities["energy_ratio"].error)
+    assert [s.setting for s in result.summary("energy")] == [plan.settings[2]]
+    assert "| setting | level |" in result.to_markdown("energy_ratio")
+    # no finished setting has a per-unit energy error yet: the tables, without the figure
+    written = write_study(result, tmp_path, quantity="energy_ratio")
+    assert [p.name for p in written] == ["accuracy.csv", "accuracy.md"]
+    assert [p.name for p in write_study(result, tmp_path, quantity="energy")][-1] == \
+        "accuracy.png"
+    with pytest.raises(ValueError, match="runs lack setting 0"):
+        StudyResult.from_runs(plan, some)
 
 
 # -- the committed paper-scale study ------------------------------------------------------------

@@ -237,8 +237,9 @@ def read_study(folder: str | os.PathLike[str]) -> StudyResult:
     """The table of a study from what its folder holds, without running anything.
 
     Reads the plan (``<folder>/study.json``) and the finished runs of its campaign store
-    (``<folder>/store``) and tabulates every setting whose runs are all finished; the others
-    are listed in :attr:`StudyResult.pending` (a study still under way, or stopped).
+    (``<folder>/store``) and tabulates every setting at the load levels where its runs and
+    the reference's are all finished; settings that lack runs are listed in
+    :attr:`StudyResult.pending` (a study still under way, or stopped).
 
     Parameters
     ----------
@@ -252,7 +253,8 @@ def read_study(folder: str | os.PathLike[str]) -> StudyResult:
     Raises
     ------
     ValueError
-        when the plan cannot be read, or the reference's runs are not all finished.
+        when the plan cannot be read, or the reference has no load level whose runs are all
+        finished.
     """
     plan = read_study_plan(folder)
     store = Path(folder) / "store"

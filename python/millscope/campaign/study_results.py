@@ -232,8 +232,8 @@ class StudyResult:
     description : str
         The case studied, e.g. ``"balls-MS, 3 seeds, 0.71 of critical speed"``.
     pending : tuple of Setting
-        Settings of the plan not tabulated because some of their runs are not finished
-        (:meth:`from_runs` with ``partial``).
+        Settings of the plan some of whose runs are not finished (:meth:`from_runs` with
+        ``partial``): their finished levels are in the rows, but not in :meth:`summary`.
     """
 
     rows: tuple[StudyRow, ...]
@@ -255,8 +255,10 @@ class StudyResult:
         store : Path, optional
             The campaign store holding the runs' records.
         partial : bool
-            Tabulate only the settings whose runs are all there (a study still under way) and
-            list the others in :attr:`pending`; the reference's runs must all be there.
+            A study still under way: tabulate each setting at the load levels where its runs
+            and the reference's are all there, and list the settings that lack runs in
+            :attr:`pending` (they have no per-unit energy or slope, and stay off the Pareto
+            front); the reference must have one finished level.
 
         Raises
         ------
@@ -266,25 +268,33 @@ class StudyResult:
         run_list = tuple(runs)
         by_key = {(r.setting, r.load_level, r.seed): r for r in run_list}
 
-        def missing(k: int) -> list[tuple[int, int]]:
-            return [(level, seed) for level in plan.load_levels for seed in plan.seeds
-                    if (k, level, seed) not in by_key]
+        def finished_levels(k: int) -> list[int]:
+            return [level for level in plan.load_levels
+                    if all((k, level, seed) in by_key for seed in plan.seeds)]
+
+        def first_missing(k: int) -> str:
+            level, seed = next((level, seed) for level in plan.load_levels
+                               for seed in plan.seeds if (k, level, seed) not in by_key)
+            return (f"runs lack setting {k} ({plan.settings[k].label}) at load level {level}, "
+                    f"seed {seed}")
 
         ref = plan.reference_index
-        complete, pending = [], []
+        ref_levels = finished_levels(ref)
+        if not ref_levels or (not partial and len(ref_levels) < len(plan.load_levels)):
+            raise ValueError(first_missing(ref) + (" (the reference: nothing to compare with "
+                                                   "yet)" if partial else ""))
+        tabulated: list[tuple[int, list[int]]] = []
+        pending = []
         for k in range(len(plan.settings)):
-            lacking = missing(k)
-            if not lacking:
-                complete.append(k)
-            elif partial and k != ref:
+            done = finished_levels(k)
+            if len(done) < len(plan.load_levels):
+                if not partial:
+                    raise ValueError(first_missing(k))
                 pending.append(plan.settings[k])
-            else:
-                level, seed = lacking[0]
-                raise ValueError(f"runs lack setting {k} ({plan.settings[k].label}) at load "
-                                 f"level {level}, seed {seed}"
-                                 + (" (the reference: nothing to compare with yet)"
-                                    if partial else ""))
-        first_ref = by_key[(ref, plan.load_levels[0], plan.seeds[0])]
+            levels = [level for level in done if level in ref_levels]
+            if levels:
+                tabulated.append((k, levels))
+        first_ref = by_key[(ref, ref_levels[0], plan.seeds[0])]
         length_ref, block_ref = first_ref.length_m, first_ref.block_s
 
         def values(k: int, level: int, quantity: str) -> list[float]:
@@ -303,12 +313,13 @@ class StudyResult:
             return out
 
         rows = []
-        for k in complete:
+        every = len(plan.load_levels)
+        for k, levels in tabulated:
             setting = plan.settings[k]
             across = {q: (_statistics(level_values(k, q), level_values(ref, q), k == ref)
-                          if len(plan.load_levels) > 1 else _NAN_ERROR)
+                          if every > 1 and len(levels) == every else _NAN_ERROR)
                       for q in LEVEL_QUANTITIES}
-            for level in plan.load_levels:
+            for level in levels:
                 group = [by_key[(k, level, s)] for s in plan.seeds]
                 stats = {q: _statistics(values(k, level, q), values(ref, level, q), k == ref)
                          for q in QUANTITIES if q not in LEVEL_QUANTITIES}
@@ -344,7 +355,8 @@ class StudyResult:
         return next(r.setting for r in self.rows if r.reference)
 
     def summary(self, quantity: str = "energy", cost: str = "wall_s") -> list[SettingSummary]:
-        """Every setting as a point (cost, |error|), in table order.
+        """Every setting whose runs are all finished as a point (cost, |error|), in table
+        order.
 
         Parameters
         ----------
@@ -363,6 +375,8 @@ class StudyResult:
         _checks.choice("cost", cost, COSTS)
         out = []
         for s in self.settings:
+            if s in self.pending:  # a part of its levels: neither its cost nor its error
+                continue
             rows = [r for r in self.rows if r.setting == s]
             total = float(sum(getattr(r, cost) for r in rows))
             worst = max(rows, key=lambda r: (abs(r.quantities[quantity].error)
@@ -535,7 +549,8 @@ class StudyResult:
         front = set(self.pareto(pareto_quantity, cost))
         shown = [q for q in QUANTITIES
                  if any(math.isfinite(r.quantities[q].error) for r in self.rows)]
-        multi = len({r.load_level for r in self.rows}) > 1
+        multi = (len({r.load_level for r in self.rows}) > 1
+                 or (self.plan is not None and len(self.plan.load_levels) > 1))
         names = {"mean_torque": "mean torque", "energy": "energy",
                  "lth_amplitude": "LTH amplitude", "slope_a": "slope a",
                  "energy_ratio": "per-unit energy"}
@@ -583,7 +598,8 @@ class StudyResult:
                       f"error {100 * se:.1f} % from {seeds} seeds; a 5 % standard error needs "
                       f"{max(need, 2)} seeds" + (" (met)." if se <= 0.05 else ".")]
         if self.pending:
-            notes += ["", "Not finished yet (left out): "
+            notes += ["", "Not finished yet (only their finished levels are shown, and they "
+                      "stay off the Pareto front): "
                       + "; ".join(s.label for s in self.pending) + "."]
         return "\n".join(notes) + "\n"
 

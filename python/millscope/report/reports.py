@@ -371,6 +371,8 @@ def write_study(result: StudyResult, folder: str | os.PathLike[str], stem: str =
     """Writes a study's ``<stem>.csv``, ``<stem>.md`` and ``<stem>.png`` (error against cost,
     ``"wall_s"`` or ``"particle_steps"``, :func:`millscope.plots.plot_accuracy`) into
     ``folder``, each atomically. Particle-steps do not depend on the machine or its load.
+    The figure is left out while no finished setting has an error of ``quantity`` (a study
+    under way whose settings are not finished at every level).
 
     Returns
     -------
@@ -382,5 +384,8 @@ def write_study(result: StudyResult, folder: str | os.PathLike[str], stem: str =
     result.to_csv(csv_path)
     with atomic_write(md_path, "w") as fh:
         fh.write(result.to_markdown(quantity, cost))
+    if not any(math.isfinite(p.error) and not p.reference
+               for p in result.summary(quantity, cost)):
+        return [csv_path, md_path]
     png = plots.save_figure(plots.plot_accuracy(result, quantity, cost=cost), out / f"{stem}.png")
     return [csv_path, md_path, png]
