@@ -300,9 +300,17 @@ def test_bad_campaign_files_are_one_line(tmp_path, monkeypatch, capsys) -> None:
     assert not (tmp_path / "store").exists()
 
 
-@pytest.mark.parametrize("name", ["tiny.toml", "paper.toml", "jar.toml", "campaign.toml"])
+@pytest.mark.parametrize("name", ["tiny.toml", "paper.toml", "jar.toml", "campaign.toml",
+                                  "paper_campaign.toml"])
 def test_the_examples_are_valid(tmp_path, monkeypatch, name: str) -> None:
     monkeypatch.chdir(tmp_path)  # checking writes nothing
-    load = case_files.load_campaign if name == "campaign.toml" else case_files.load_run
-    load(EXAMPLES / name)
+    campaign = name.endswith("campaign.toml")
+    load = case_files.load_campaign if campaign else case_files.load_run
+    plan = load(EXAMPLES / name)
     assert list(tmp_path.iterdir()) == []
+    if name == "paper_campaign.toml":  # Table 5's seven levels, 3 seeds, both sampling modes
+        assert isinstance(plan, case_files.CampaignPlan)
+        cases = plan.campaign.cases
+        assert len(cases) == 7 * 3 * 2
+        assert sorted({c.scene.n_particles for c in cases}) == [
+            pilot_mill(0.71, "ceramic", level, "paper").n_particles for level in range(1, 8)]
