@@ -187,6 +187,9 @@ def test_groups_are_particles_by_speed_in_table_6_order() -> None:
     assert table[2].startswith("| HDLS | " + hdls.fit.equation())
     assert f"{hdls.fit.a:.4g} [{hdls.a_interval[0]:.4g}, {hdls.a_interval[1]:.4g}]" in table[2]
     assert "one level: no fit" in table[5]
+    # beside each group, the paper's fit of the same group (Table 6 of the paper)
+    assert table[2].endswith("| y = -0.423 ln(x) + 0.9279, R² = 0.965 |")
+    assert table[5].endswith("| y = -0.429 ln(x) + 0.9646, R² = 0.9882 |")
 
 
 def test_a_groups_intervals_do_not_depend_on_the_other_groups() -> None:

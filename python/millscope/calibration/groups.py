@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from .. import _checks
 from ..signal.analysis import MIN_SUB_BLOCKS, AnalysisSettings, sub_block_energies
+from ..signal.synthetic import PAPER_TABLE_6
 from .bootstrap import log_residuals, mean_factors, percentile_interval, pooled_mean_factors
 from .logfit import LogFit, log_fit, log_fit_coefficients, per_unit
 
@@ -394,24 +395,28 @@ def table6_markdown(groups: Sequence[GroupAnalysis]) -> str:
     """The paper's Table 6 for these groups, as a Markdown table (header and one row each).
 
     Columns: the group's code, the fit's equation, R^2, a and b each with its bootstrap
-    interval, the load levels, the cases, and where the intervals come from. A fit through 2
-    levels passes through both exactly: its R^2 of 1 says nothing and reads "1 (exact: 2
-    levels)".
+    interval, the load levels, the cases, where the intervals come from, and the paper's fit
+    for the same group (Table 6, :data:`~millscope.synthetic.PAPER_TABLE_6`; the paper's a
+    range from -0.476 to -0.408, its R^2 from 0.898 to 0.996). A fit through 2 levels passes
+    through both exactly: its R^2 of 1 says nothing and reads "1 (exact: 2 levels)".
     """
     if not groups:
         raise ValueError("groups is empty; give at least one GroupAnalysis")
     percent = f"{100 * groups[0].confidence:g} %"
     rows = [f"| Case | Equation | R² | a [{percent}] | b [{percent}] | levels | cases | "
-            "interval from |",
-            "|---|---|---|---|---|---|---|---|"]
+            "interval from | paper's fit (Table 6) |",
+            "|---|---|---|---|---|---|---|---|---|"]
     for g in groups:
         source = ", ".join(sorted(set(g.interval_source)))
+        paper = PAPER_TABLE_6.get(g.name.split("-")[0])
+        published = ("-" if paper is None
+                     else f"y = {paper[0]:g} ln(x) + {paper[1]:g}, R² = {paper[2]:g}")
         if g.fit is None:
             rows.append(f"| {g.name} | one level: no fit | | | | {_level_range(g.levels)} | "
-                        f"{len(g.results)} | {source} |")
+                        f"{len(g.results)} | {source} | {published} |")
             continue
         rows.append(f"| {g.name} | {g.fit.equation()} | "
                     f"{r2_text(g.fit)} | {_with_interval(g.fit.a, g.a_interval)} | "
                     f"{_with_interval(g.fit.b, g.b_interval)} | {_level_range(g.levels)} | "
-                    f"{len(g.results)} | {source} |")
+                    f"{len(g.results)} | {source} | {published} |")
     return "\n".join(rows) + "\n"

@@ -10,17 +10,24 @@ energies recovers a and b up to noise. These records are not simulations of a mi
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
+from types import MappingProxyType
 
 import numpy as np
 
 from .record import TorqueRecord
 
-__all__ = ["SyntheticTorque", "synthetic_record"]
+__all__ = ["PAPER_HDMS_LAW", "PAPER_TABLE_6", "SyntheticTorque", "synthetic_record"]
 
+#: The paper's Table 6: per group, the fit y = a ln(x) + b of the DEM energies per unit against
+#: the load level x, as (a, b, R^2).
+PAPER_TABLE_6: Mapping[str, tuple[float, float, float]] = MappingProxyType({
+    "HDLS": (-0.423, 0.9279, 0.9650), "LDLS": (-0.451, 1.0057, 0.9881),
+    "HDMS": (-0.454, 0.9987, 0.9959), "LDMS": (-0.408, 0.8738, 0.8982),
+    "HDHS": (-0.476, 0.9868, 0.9849), "LDHS": (-0.429, 0.9646, 0.9882)})
 #: HDMS fit of the paper's Table 6, y = -0.454 ln(x) + 0.9987.
-PAPER_HDMS_LAW = (-0.454, 0.9987)
+PAPER_HDMS_LAW = PAPER_TABLE_6["HDMS"][:2]
 
 
 @dataclass(frozen=True)
