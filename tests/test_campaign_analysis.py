@@ -226,17 +226,28 @@ def test_bad_input_names_the_parameter_and_the_cases() -> None:
 
 
 def test_cases_of_other_scales_or_sampling_are_not_taken_for_repeats() -> None:
-    """The group key (particles x speed) does not see the scale or the sampling; "small" and
-    "tiny" share the drum but not the materials (stiffness), and instant and mean sampling
-    differ in energy by up to an order of magnitude (docs/architecture.md, Sampling)."""
+    """The group key (particles x speed x sampling mode) does not see the scale or the sampling
+    interval; "small" and "tiny" share the drum but not the materials (stiffness), and instant
+    and mean sampling differ in energy by up to an order of magnitude (docs/architecture.md,
+    Sampling): each mode is a group of its own, named by it."""
     tiny = case_results(levels=(1, 2))
     scene = ms.presets.pilot_mill(0.71, "ceramic", 2, scale="small")
     record = synthetic_record(2, content=content_for(scene))
     small = CaseResult.from_record(Case(scene, RunSettings(seed=1)), record, SETTINGS)
     with pytest.raises(ValueError, match="group LDMS: cases .* differ in materials"):
         analyze_campaign([*tiny, small])
+    finer = CaseResult.from_record(Case(tiny[1].scene, RunSettings(seed=1, sample_dt=0.005)),
+                                   record, SETTINGS)
+    with pytest.raises(ValueError, match=r"differ in sampling \(sample_dt, sampling\) "
+                                         r"\(\(0.01, 'instant'\) and \(0.005, 'instant'\)\)"):
+        analyze_campaign([*tiny, finer])
     mean = CaseResult.from_record(Case(tiny[1].scene, RunSettings(seed=1, sampling="mean")),
                                   record, SETTINGS)
-    with pytest.raises(ValueError, match=r"differ in sampling \(sample_dt, sampling\) "
-                                         r"\(\(0.01, 'instant'\) and \(0.01, 'mean'\)\)"):
-        analyze_campaign([*tiny, mean])
+    alone = analyze_campaign(tiny)[0]
+    both = analyze_campaign([*tiny, mean])
+    assert [(g.name, g.sampling) for g in both] == [("LDMS-instant", "instant"),
+                                                    ("LDMS-mean", "mean")]
+    np.testing.assert_array_equal(both[0].energy, alone.energy)
+    assert both[0].fit == alone.fit and alone.name == "LDMS" and alone.sampling == "instant"
+    np.testing.assert_array_equal(both[1].levels, [2.0])
+    assert both[1].energy[0] == mean.energy

@@ -133,7 +133,8 @@ def test_campaign_file_runs_and_resumes_its_store(tmp_path, monkeypatch, capsys)
     assert "2 cases, 0 already done" in out
     files = sorted((tmp_path / "store" / "cases").glob("*.npz"))
     rows = [line.split() for line in out.splitlines() if line.startswith("jar ")]
-    assert len(files) == 2 and [r[1:3] for r in rows] == [["0", "done"], ["1", "done"]]
+    assert len(files) == 2 and [r[1:4] for r in rows] == [["0", "mean", "done"],
+                                                          ["1", "mean", "done"]]
     first = ms.TorqueRecord.load(files[0])
     stamps = {f: f.stat().st_mtime_ns for f in files}
 
@@ -147,6 +148,38 @@ def test_campaign_file_runs_and_resumes_its_store(tmp_path, monkeypatch, capsys)
     assert files[1].stat().st_mtime_ns == stamps[files[1]]
     again = ms.TorqueRecord.load(files[0])
     np.testing.assert_array_equal(again.torque_Nm, first.torque_Nm)  # bit for bit
+
+
+def test_a_campaign_file_listing_both_sampling_modes_stores_each_case_in_both(
+        tmp_path, monkeypatch, capsys) -> None:
+    monkeypatch.chdir(tmp_path)
+    spec = write(tmp_path, CAMPAIGN.replace('sampling = "mean"',
+                                            'sampling = ["instant", "mean"]'), "spec.toml")
+    plan = case_files.load_campaign(spec)
+    cases = plan.campaign.cases
+    assert [(c.settings.seed, c.settings.sampling) for c in cases] == [
+        (0, "instant"), (0, "mean"), (1, "instant"), (1, "mean")]
+    # each pair differs in its sampling mode alone
+    for a, b in (cases[0:2], cases[2:4]):
+        assert a.settings.replace(sampling="mean") == b.settings and a.scene == b.scene
+    assert main(["campaign", str(spec), "--no-progress"]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()
+            if line.startswith("jar ")]
+    assert [r[1:4] for r in rows] == [["0", "instant", "done"], ["0", "mean", "done"],
+                                      ["1", "instant", "done"], ["1", "mean", "done"]]
+    infos = [ms.TorqueRecord.load(plan.campaign.case_file(k)).meta["campaign"]
+             for k in range(4)]
+    assert infos[0]["wall_time_s"] == infos[1]["wall_time_s"]  # one run made the pair
+
+
+@pytest.mark.parametrize("value", ['[]', '["mean", "mean"]', '["instant", "sum"]', '3'])
+def test_a_bad_list_of_sampling_modes_is_refused(tmp_path, value) -> None:
+    spec = write(tmp_path, CAMPAIGN.replace('sampling = "mean"', f"sampling = {value}"),
+                 "spec.toml")
+    with pytest.raises(case_files.CaseFileError,
+                       match=r"spec.toml: \[settings\] sampling = .* is not valid; it must be "
+                             r"one of 'instant', 'mean', or a list of them"):
+        case_files.load_campaign(spec)
 
 
 def api_message(build) -> str:

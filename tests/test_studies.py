@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 import millscope as ms
 from millscope import plots
 from millscope.analysis import analyze_block
+from millscope.campaign import Case
 from millscope.cli import main
 from millscope.presets import pilot_mill
 from millscope.studies import (
@@ -527,3 +528,48 @@ def test_a_stiffness_ladder_costs_more_for_stiffer_charges(tmp_path) -> None:
         assert run.particle_steps >= plan.planned_particle_steps(plan.settings[run.setting])
     result.to_csv(tmp_path / "t.csv")
     assert ms.StudyResult.from_csv(tmp_path / "t.csv").to_csv() == result.to_csv()
+
+
+class _Recording:
+    """An executor that runs cases in a thread pool and notes each submitted case."""
+
+    def __init__(self, pool: ThreadPoolExecutor) -> None:
+        self.pool = pool
+        self.cases: list[Case] = []
+
+    def submit(self, fn, case, *rest):  # noqa: ANN001, ANN201 - forwards to the pool
+        self.cases.append(Case.from_dict(case))
+        return self.pool.submit(fn, case, *rest)
+
+
+@pytest.mark.parametrize("cheapest_first", [False, True])
+def test_cases_go_in_order_of_cost_and_the_mean_setting_rides_on_the_instant_runs(
+        tmp_path, cheapest_first) -> None:
+    reference = Setting(dt_fraction=0.2, record_s=1.0, warm_up_s=0.5, sampling="instant")
+    plan = StudyPlan.around(reference, {"dt_fraction": [0.3], "sampling": ["mean"]},
+                            seeds=(0, 1))
+    with ThreadPoolExecutor(1) as pool:
+        executor = _Recording(pool)
+        result = run_study(plan, tmp_path / "store", executor=executor, progress=False,
+                           cheapest_first=cheapest_first)
+    # the mean setting's cases are never submitted: each is stored from its instant twin's run
+    assert {c.settings.sampling for c in executor.cases} == {"instant"}
+    assert len(executor.cases) == 4
+    costs = [c.scene.n_particles * c.settings.duration_s / c.settings.dt for c in executor.cases]
+    assert costs == sorted(costs, reverse=not cheapest_first)
+    assert costs[0] != costs[-1]
+    mean_runs = [r for r in result.runs if plan.settings[r.setting].sampling == "mean"]
+    instant_runs = [r for r in result.runs if r.setting == plan.reference_index]
+    assert len(mean_runs) == 2 and len(instant_runs) == 2
+    # the same steps sampled two ways: the same mean torque to within the sampling's noise,
+    # and far less spectral energy in the means (docs/architecture.md, Sampling)
+    for m, i in zip(sorted(mean_runs, key=lambda r: r.seed),
+                    sorted(instant_runs, key=lambda r: r.seed), strict=True):
+        assert m.mean_torque == pytest.approx(i.mean_torque, rel=0.05)
+        assert m.energy < i.energy
+
+
+def test_cheapest_first_must_be_a_flag(tmp_path) -> None:
+    with pytest.raises(ValueError, match="cheapest_first = 'yes' is not valid"):
+        run_study(TINY_PLAN, tmp_path / "store", cheapest_first="yes")  # type: ignore[arg-type]
+    assert not (tmp_path / "store").exists()

@@ -31,7 +31,8 @@ A campaign file has ``[campaign]`` (``store``, and optionally ``block``, ``seeds
 ``bandwidth``, ``window``, ``retry_failed`` as :class:`~millscope.Campaign` takes them),
 the scenes as ``[matrix]`` (the arguments of :func:`millscope.presets.paper_cases`) and/or
 ``[[scenes]]`` (each one as ``[scene]`` above), ``[settings]`` as above (without
-``energy_ledger``) and ``[executor]`` (``kind = "local"``, ``max_workers`` as
+``energy_ledger``; ``sampling`` may list both modes, ``["instant", "mean"]``: every case is
+then stored in both, from one run) and ``[executor]`` (``kind = "local"``, ``max_workers`` as
 :meth:`Campaign.run` takes it). A rerun on the same
 store resumes it, as :meth:`Campaign.run` does.
 
@@ -61,7 +62,7 @@ from tqdm import TqdmWarning
 
 from .. import _checks
 from .._files import read_toml
-from ..campaign.cases import Case, CaseResult, RunSettings, case_matrix
+from ..campaign.cases import SAMPLINGS, Case, CaseResult, RunSettings, case_matrix
 from ..campaign.executors import simulate_case
 from ..campaign.runs import Campaign
 from ..campaign.study_plans import Setting
@@ -160,6 +161,19 @@ def _settings(table: Mapping[str, Any], where: str) -> tuple[RunSettings, float 
                             f"{_checks.show(fraction)} are not valid together; give one of "
                             "them (neither: the engine's default step)")
     return settings, fraction
+
+
+def _sampling_modes(value: object, where: str) -> tuple[str, ...]:
+    """A campaign's sampling modes: one, or a list of distinct ones (each case then runs once
+    and is stored in every mode listed, :meth:`Campaign.run`)."""
+    items = value if isinstance(value, list) else [value]
+    valid = (f"one of {', '.join(repr(m) for m in SAMPLINGS)}, or a list of them (each case "
+             "is stored in every mode listed, from one run)")
+    if not items or len(set(map(str, items))) != len(items) or \
+            not all(isinstance(m, str) and m in SAMPLINGS for m in items):
+        raise CaseFileError(f"{where} sampling = {_checks.show(value)} is not valid; it must be "
+                            f"{valid}")
+    return tuple(items)
 
 
 def _case(scene: Scene, settings: RunSettings, fraction: float | None, where: str) -> Case:
@@ -404,11 +418,13 @@ def load_campaign(path: str | os.PathLike[str]) -> CampaignPlan:
     scenes += [_scene(t, f"{path}: [[scenes]] #{k + 1}") for k, t in enumerate(listed)]
 
     table = _table(data, "settings", str(path), _SETTINGS)
-    settings, fraction = _settings(table, f"{path}: [settings]")
+    modes = _sampling_modes(table.get("sampling", "instant"), f"{path}: [settings]")
+    settings, fraction = _settings({**table, "sampling": modes[0]}, f"{path}: [settings]")
     with _api(where):
         cases = [case for scene in scenes
                  for case in case_matrix([scene], seeds=top.get("seeds"), settings=settings)]
-    cases = [_case(c.scene, c.settings, fraction, f"{path}: [settings]") for c in cases]
+    cases = [_case(c.scene, c.settings.replace(sampling=mode), fraction, f"{path}: [settings]")
+             for c in cases for mode in modes]
     options = {k: top[k] for k in ("block", "bandwidth", "window") if k in top}
     store = top["store"]
     with _api(where):
@@ -453,12 +469,13 @@ def run_campaign(plan: CampaignPlan, *, progress: bool = True) -> int:
 
 
 def _table_of(results: list[CaseResult]) -> str:
-    lines = [f"{'case':<20} {'seed':>4} {'status':<7} {'mean_Nm':>10} {'lth_amp_Nm':>10} "
-             f"{'energy':>11} {'wall_s':>7}"]
+    lines = [f"{'case':<20} {'seed':>4} {'sampling':<8} {'status':<7} {'mean_Nm':>10} "
+             f"{'lth_amp_Nm':>10} {'energy':>11} {'wall_s':>7}"]
     for r in results:
         def num(x: float, fmt: str) -> str:
             return format(x, fmt) if math.isfinite(x) else "-"
-        lines.append(f"{r.scene.name or 'scene':<20} {r.case.settings.seed:>4} {r.status:<7} "
+        lines.append(f"{r.scene.name or 'scene':<20} {r.case.settings.seed:>4} "
+                     f"{r.case.settings.sampling:<8} {r.status:<7} "
                      f"{num(r.mean_torque, '10.4g'):>10} {num(r.lth_amplitude, '10.4g'):>10} "
                      f"{num(r.energy, '11.4g'):>11} {num(r.wall_time_s, '7.1f'):>7}")
     return "\n".join(lines)

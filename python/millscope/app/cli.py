@@ -382,7 +382,8 @@ def cmd_study_accuracy(args: argparse.Namespace) -> int:
                 f"{out / 'store'}")
     sys.stdout.flush()
     result = _resumable(lambda: run_study(plan, out / "store", max_workers=args.workers,
-                                          progress=not args.no_progress),
+                                          progress=not args.no_progress,
+                                          cheapest_first=args.cheapest_first),
                         out / "store", "runs")
     if result is None:
         return EXIT_INTERRUPTED
@@ -701,6 +702,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=_positive_int, default=1,
                    help="runs at a time (default 1, so that their wall times do not disturb "
                         "each other)")
+    p.add_argument("--cheapest-first", action="store_true",
+                   help="run the cheapest cases first (default: the most expensive first); "
+                        "a study spread over several sittings then finishes its cheap settings "
+                        "early, and a long case goes on from its in-case checkpoint")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     _add_format_argument(p, "the table (one row per setting and level, as accuracy.csv)")
     p.set_defaults(func=cmd_study_accuracy)

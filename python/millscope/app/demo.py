@@ -63,7 +63,7 @@ from ..signal.record import TorqueRecord
 from ..signal.spectral import LTH_CLEAR_BINS, band_stop, lifter_harmonic_hz, spectrum
 from ..signal.synthetic import PAPER_HDMS_LAW, SyntheticTorque, synthetic_record
 
-__all__ = ["DemoPlan", "DemoResult", "main_job_section", "pilot_mill_rotation_hz", "run_demo",
+__all__ = ["DemoPlan", "DemoResult", "main_job_section", "run_demo",
            "run_synthetic_demo"]
 
 
@@ -472,14 +472,6 @@ SYNTHETIC_LEVELS = (1, 2, 3, 4, 5, 6, 7)
 SYNTHETIC_BLOCK_S = (4.0, 14.0)
 
 
-def pilot_mill_rotation_hz(speed_fraction: float = 0.71, drum_diameter_m: float = 0.880,
-                           ball_diameter_m: float = 0.025, gravity_m_s2: float = 9.81) -> float:
-    """Rotation frequency of the pilot mill, Hz: speed_fraction x omega_c / 2 pi with
-    omega_c = sqrt(2 g / (D - d)) (docs/physics.md, Critical speed and the lifter harmonic)."""
-    omega_c = np.sqrt(2 * gravity_m_s2 / (drum_diameter_m - ball_diameter_m))
-    return float(speed_fraction * omega_c / (2 * np.pi))
-
-
 def run_synthetic_demo(out: str | os.PathLike[str], *, progress: bool = True) -> str:
     """The analysis alone on synthetic records (``millscope demo --synthetic``), in seconds.
 
@@ -500,7 +492,7 @@ def run_synthetic_demo(out: str | os.PathLike[str], *, progress: bool = True) ->
     """
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
-    content = SyntheticTorque(rotation_hz=pilot_mill_rotation_hz(0.71))
+    content = SyntheticTorque(rotation_hz=pilot_mill(0.71).rotation_hz)
     analyses, spectra = [], []
     for level in tqdm(SYNTHETIC_LEVELS, desc="synthetic cases", disable=not progress):
         record = synthetic_record(level, content=content, seed=level)

@@ -56,7 +56,9 @@ class GroupAnalysis:
     Attributes
     ----------
     name : str
-        The paper's code of the group, e.g. ``"LDMS"`` (:func:`~millscope.presets.case_key`).
+        The paper's code of the group, e.g. ``"LDMS"`` (:func:`~millscope.presets.case_key`);
+        when the campaign holds cases in both sampling modes, one group per mode, named with
+        the mode: ``"LDMS-instant"``, ``"LDMS-mean"``.
     particles : str
         "ceramic" (LD), "steel" (HD) or another material's name.
     speed_fraction : float or None
@@ -65,6 +67,8 @@ class GroupAnalysis:
         Rotation frequency, Hz.
     lifters : int
         Lifter count (0: no lifters, no LTH).
+    sampling : {"instant", "mean"}
+        How the group's torque was sampled (:class:`~millscope.campaign.RunSettings`).
     levels : ndarray
         Load levels x (Table 5: particle filling in units of 40 %).
     repeats : ndarray of int
@@ -110,6 +114,7 @@ class GroupAnalysis:
     speed_fraction: float | None
     rotation_hz: float
     lifters: int
+    sampling: str
     levels: NDArray[np.float64]
     repeats: NDArray[np.int64]
     mean_torque: NDArray[np.float64]
@@ -156,7 +161,9 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
                      sub_blocks: int = 10) -> list[GroupAnalysis]:
     """The paper's section 6 for the finished cases of a campaign, group by group.
 
-    Cases are grouped by their particles and speed (:func:`~millscope.presets.case_key`);
+    Cases are grouped by their particles and speed (:func:`~millscope.presets.case_key`) and,
+    when both are present, their sampling mode (one group per mode, named ``"LDMS-instant"``,
+    ``"LDMS-mean"``);
     balls-only cases (no load level) are left out. Within a group, cases at the same load level
     are repeats (other seeds): each level's mean torque, LTH and energy are their means. The
     energies are made per unit of the largest level's (the lowest filling) and fitted with
@@ -222,8 +229,8 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
         raise ValueError(f"results holds no finished case (status 'done') among "
                          f"{len(all_results)} ({counts['pending']} pending, {counts['failed']} "
                          "failed); nothing to analyse")
-    groups: dict[tuple[str, float], list[tuple[float, CaseResult]]] = {}
-    names: dict[tuple[str, float], tuple[str, float | None]] = {}
+    groups: dict[tuple[str, float, str], list[tuple[float, CaseResult]]] = {}
+    names: dict[tuple[str, float, str], tuple[str, float | None]] = {}
     for r in done:
         if r.analysis is None or not math.isfinite(r.energy):
             raise ValueError(f"case {r.case.name} ({r.hash[:12]}) was not analysed over a block; "
@@ -232,17 +239,19 @@ def analyze_campaign(results: Iterable[CaseResult], *, bootstrap: int = 1000,
         if key.load_level is None or key.particles is None:
             continue
         speed = key.speed_fraction if key.speed_fraction is not None else key.rotation_hz
-        gk = (key.particles, round(speed, 9))
+        gk = (key.particles, round(speed, 9), r.case.settings.sampling)
         groups.setdefault(gk, []).append((key.load_level, r))
         names[gk] = (key.group, key.speed_fraction)
     if not groups:
         raise ValueError(f"none of the {len(done)} finished cases has particles to grind and a "
                          "load level (balls-only cases have none); no group to analyse")
+    if len({gk[2] for gk in groups}) > 1:  # both modes: a group per mode, named by it
+        names = {gk: (f"{code}-{gk[2]}", speed) for gk, (code, speed) in names.items()}
     out = [_analyze_group(names[gk][0], gk[0], names[gk][1], members, bootstrap=bootstrap,
                           confidence=float(confidence), seed=seed, sub_blocks=sub_blocks)
            for gk, members in groups.items()]
     return sorted(out, key=lambda g: (g.speed_fraction if g.speed_fraction is not None
-                                      else g.rotation_hz, g.name))
+                                      else g.rotation_hz, g.name))  # -instant before -mean
 
 
 def _same(name: str, what: str, members: Sequence[tuple[float, CaseResult]],
@@ -319,8 +328,9 @@ def _analyze_group(name: str, particles: str, speed_fraction: float | None,
     lifters = _same(name, "lifters", members, lambda r: (
         0 if r.scene.drum.lifters is None else r.scene.drum.lifters.count))
     rotation_hz = _same(name, "rotation frequency (Hz)", members, lambda r: r.scene.rotation_hz)
-    # the group key (particles x speed) does not see the scale or the sampling: cases that
-    # differ there are not repeats of one another and must not be averaged
+    # the group key (particles x speed x sampling mode) does not see the scale or the sampling
+    # interval: cases that differ there are not repeats of one another and must not be
+    # averaged
     _same(name, "drum", members, lambda r: r.scene.drum)
     _same(name, "materials", members, lambda r: r.scene.materials)
     _same(name, "sampling (sample_dt, sampling)", members,
@@ -352,7 +362,8 @@ def _analyze_group(name: str, particles: str, speed_fraction: float | None,
             a_interval, b_interval = (float(a_lo), float(a_hi)), (float(b_lo), float(b_hi))
     return GroupAnalysis(
         name=name, particles=particles, speed_fraction=speed_fraction,
-        rotation_hz=float(rotation_hz), lifters=int(lifters), levels=_frozen(levels),
+        rotation_hz=float(rotation_hz), lifters=int(lifters),
+        sampling=members[0][1].case.settings.sampling, levels=_frozen(levels),
         repeats=_frozen([len(rs) for rs in by_level], np.int64), mean_torque=mean_torque,
         torque_pu=_frozen(mean_torque / np.max(mean_torque)),
         lth_hz=level_means("lth_hz"), lth_amplitude=level_means("lth_amplitude"),

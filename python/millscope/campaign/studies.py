@@ -123,13 +123,15 @@ def _run_of(plan: StudyPlan, index: int, result: CaseResult) -> StudyRun:
 
 
 def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any = None,
-              max_workers: int | None = None, progress: bool = True) -> StudyResult:
+              max_workers: int | None = None, progress: bool = True,
+              cheapest_first: bool = False) -> StudyResult:
     """Runs a study's cases through a :class:`~millscope.campaign.Campaign` and tabulates them.
 
     The cases go to the campaign from the most expensive to the cheapest (so that the
-    longest do not start last). The store keeps every finished case: a rerun of the same plan
-    (or of a plan sharing cases) runs only what is missing, and reports the wall times the
-    cases took when they ran.
+    longest do not start last), or with ``cheapest_first`` the other way round. The store
+    keeps every finished case: a rerun of the same plan (or of a plan sharing cases) runs only
+    what is missing, goes on with a case that was killed half-way from its in-case
+    checkpoint, and reports the wall times the cases took when they ran.
 
     Parameters
     ----------
@@ -144,6 +146,10 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
         time, so that the measured wall times do not disturb each other.
     progress : bool
         Show the campaign's progress bar.
+    cheapest_first : bool
+        Run the cheapest cases first: a study spread over several sittings then has its
+        cheap settings finished early, and its longest cases go on from their in-case
+        checkpoints (:meth:`Campaign.run`) from one sitting to the next.
 
     Returns
     -------
@@ -158,8 +164,15 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
     """
     if not isinstance(plan, StudyPlan):
         raise _checks.fail("plan", plan, "a StudyPlan")
-    order = sorted((i for i in range(len(plan.cases())) if plan.donor(i) is None),
-                   key=lambda i: -plan.planned_particle_steps(plan.settings[plan._cases[i][0]]))
+    _checks.flag("cheapest_first", cheapest_first)
+    sign = 1.0 if cheapest_first else -1.0
+
+    def cost(i: int) -> float:
+        _, _, _, case = plan._cases[i]
+        assert case.settings.dt is not None  # set for every case of a study
+        return sign * case.scene.n_particles * case.settings.duration_s / case.settings.dt
+
+    order = sorted((i for i in range(len(plan.cases())) if plan.donor(i) is None), key=cost)
     campaign = Campaign([plan._cases[i][3] for i in order], store, block=None)
     if executor is None and max_workers is None:
         max_workers = 1
