@@ -11,6 +11,7 @@ drum axis.
 
     nice -n 5 .venv/bin/python benchmarks/time_to_first_sample.py --cases balls ceramic4
     nice -n 5 .venv/bin/python benchmarks/time_to_first_sample.py --cases balls --rotate 1.0
+    .venv/bin/python benchmarks/time_to_first_sample.py --slices 200000 --scale tiny
 
 Writes ``benchmarks/results/time_to_first_sample.csv`` (one row per case, appended) and
 ``benchmarks/results/time_to_first_sample_trace.csv`` (the rest measure over settling time).
@@ -71,7 +72,9 @@ def bed_shape(sim: Simulation) -> tuple[float, float]:
 
 def time_case(label: str, scale: str, seed: int, threads: int, rotate_s: float,
               speed: float) -> tuple[dict[str, Any], list[dict[str, Any]]]:
-    scene = ms.presets.pilot_mill(speed, scale=scale, **CASES[label])
+    scene = (ms.presets.axial_slice(int(label.removeprefix("slice-")), scale, speed)
+             if label.startswith("slice-")
+             else ms.presets.pilot_mill(speed, scale=scale, **CASES[label]))
     sim = Simulation(scene, seed=seed, threads=threads, track_energy=False)
     trace: list[dict[str, Any]] = []
     start = time.perf_counter()
@@ -120,7 +123,11 @@ def time_case(label: str, scale: str, seed: int, threads: int, rotate_s: float,
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--cases", nargs="+", default=["balls", "ceramic4"], choices=sorted(CASES))
+    p.add_argument("--cases", nargs="+", default=None, choices=sorted(CASES),
+                   help="default: balls ceramic4, or none when --slices are given")
+    p.add_argument("--slices", nargs="+", type=int, default=[],
+                   help="also periodic axial slices of the pilot mill holding this many balls "
+                        "(presets.axial_slice), e.g. 200000 with --scale tiny")
     p.add_argument("--scale", default="paper")
     p.add_argument("--seeds", nargs="+", type=int, default=[0])
     p.add_argument("--threads", type=int, default=1)
@@ -129,7 +136,9 @@ def main() -> int:
     p.add_argument("--tag", default="", help="a note stored with each row")
     p.add_argument("--out", type=Path, default=RESULTS / "time_to_first_sample.csv")
     args = p.parse_args()
-    for label in args.cases:
+    cases = args.cases if args.cases is not None else ([] if args.slices else
+                                                        ["balls", "ceramic4"])
+    for label in [*cases, *(f"slice-{n}" for n in args.slices)]:
         for seed in args.seeds:
             row, trace = time_case(label, args.scale, seed, args.threads, args.rotate,
                                    args.speed)

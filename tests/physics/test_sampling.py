@@ -43,6 +43,27 @@ def test_each_mean_sample_averages_exactly_its_interval(steps_before: int) -> No
     assert means[0, 0] == pytest.approx(sample_dt * (1 + -(-steps_before // per_sample)))
 
 
+@pytest.mark.parametrize("steps_before", [0, 13])
+def test_a_row_holds_both_modes_of_the_same_steps(steps_before: int) -> None:
+    """Columns 1-4 in the mode asked for, 5-8 in the other: an instant run's last four columns
+    are a mean run's first four to the bit (twin engines, same steps), and the other way
+    round; and the instant samples are the per-step torque at the sample steps."""
+    sample_dt_steps, count = 10, 7
+    inst_eng, mean_eng, steps_eng = drum(steps_before), drum(steps_before), drum(steps_before)
+    sample_dt = sample_dt_steps * inst_eng.dt
+    inst = inst_eng.advance_sampled(sample_dt, False, count)
+    mean = mean_eng.advance_sampled(sample_dt, True, count)
+    assert inst.shape == mean.shape == (count, 9)
+    assert np.array_equal(inst[:, 0], mean[:, 0])
+    assert np.array_equal(inst[:, 5:], mean[:, 1:5])
+    assert np.array_equal(mean[:, 5:], inst[:, 1:5])
+    steps = steps_eng.advance_sampled(steps_eng.dt, False, (count + 3) * sample_dt_steps)
+    at = {int(round(t / steps_eng.dt)): row for t, row in zip(steps[:, 0], steps[:, 1:5],
+                                                               strict=True)}
+    for t_k, row in zip(inst[:, 0], inst[:, 1:5], strict=True):
+        assert np.array_equal(at[int(round(t_k / inst_eng.dt))], row)
+
+
 @pytest.mark.parametrize("mean", [True, False])
 def test_a_run_cut_into_short_calls_gives_the_same_samples(mean: bool) -> None:
     """Calls of at most 7 steps each (samples every 10 steps) that resume the sample under way
