@@ -196,3 +196,43 @@ def test_a_checkpoint_of_each_phase_loads(tmp_path: Path) -> None:
         again = ms.Simulation.load(sim.save(tmp_path / f"{phase}.npz"))
         assert again.phase == phase
         assert np.array_equal(again.positions, sim.positions)
+
+
+@pytest.mark.parametrize(("particles", "scale"), [(None, "paper"), ("ceramic", "paper"),
+                                                  (None, "tiny"), ("ceramic", "tiny")])
+def test_the_default_skin_lets_the_fastest_particle_take_ten_steps_to_a_rebuild(
+        particles: str | None, scale: str) -> None:
+    """A rebuild is due once a particle has moved half the skin: at the upper impact speed that
+    takes at least 10 steps, unless the skin is at its cap of 1.2 r_min; at the paper's
+    stiffness the skin is the LIGGGHTS yardstick's 0.4 r_min (5 mm for the 12.5 mm balls)."""
+    from millscope.engine.simulation import default_skin
+
+    scene = ms.presets.pilot_mill(0.71, particles, 1 if particles is None else 4, scale)
+    sim = ms.Simulation(scene, threads=1)
+    r_min = float(scene.particle_radii().min())
+    skin = sim._engine.skin
+    assert skin == default_skin(scene, sim.dt)
+    assert 0.4 * r_min <= skin <= 1.2 * r_min * (1 + 1e-12)
+    steps_to_rebuild = skin / 2 / (ms.stiffness.upper_impact_speed(scene) * sim.dt)
+    assert steps_to_rebuild >= 10 * (1 - 1e-12) or skin == pytest.approx(1.2 * r_min)
+    if scale == "paper":
+        assert skin == 0.4 * r_min
+        if particles is None:
+            assert skin == pytest.approx(0.005)
+
+
+def test_the_skin_changes_no_contact() -> None:
+    """The tiny scale's default skin (1.2 r_min) against the floor (0.4 r_min), from the same
+    filling: three times fewer list builds, and the same motion to round-off after 1500 steps
+    of the charge falling into the drum and colliding (positions within 1e-9 m)."""
+    scene = ms.presets.pilot_mill(0.71, "ceramic", 1, "tiny")
+    r_min = float(scene.particle_radii().min())
+    runs = []
+    for skin in (None, 0.4 * r_min):
+        sim = ms.Simulation(scene, seed=3, threads=1, skin=skin)
+        sim.fill()
+        sim._engine.advance(1500)
+        runs.append((sim.positions, sim._engine.list_builds))
+    (wide, wide_builds), (narrow, narrow_builds) = runs
+    assert wide_builds * 2 < narrow_builds
+    np.testing.assert_allclose(wide, narrow, rtol=0, atol=1e-9)

@@ -86,6 +86,13 @@ CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"
 #: outside Hertz theory (tests/physics/test_guards.py).
 SPEED_BOUND_FACTOR = 10.0
 MAX_OVERLAP_FRACTION = 1.0
+#: The default Verlet-list skin (:func:`default_skin`): the list is rebuilt once a particle
+#: has moved half the skin, and a particle at the upper impact speed should need at least
+#: SKIN_REBUILD_STEPS steps for that; the skin stays within SKIN_RANGE x the smallest radius
+#: (0.4 r_min is what the LIGGGHTS yardstick uses, and more than about 1.2 r_min lists so many
+#: pairs that the pair search costs more than the rebuilds it saves).
+SKIN_REBUILD_STEPS = 10
+SKIN_RANGE = (0.4, 1.2)
 #: Engine work handed to C++ in one call, in particle-steps and in steps (a step has a cost of
 #: its own however few the particles): Ctrl-C and the progress bar act between calls, so a
 #: call must last well under a second on a slow machine.
@@ -179,7 +186,9 @@ class Simulation:
         each step is split into this many shares, and runs are reproducible bit for bit at a
         given thread count.
     skin : float, optional
-        Verlet-list skin, m; default 0.4 x the smallest particle radius.
+        Verlet-list skin, m, > 0; default :func:`default_skin` (0.4 x the smallest radius at
+        the paper's stiffness, more at the soft scales' long time steps). It changes the cost
+        of a step, never which contacts act.
     settle_tolerance : float
         Settled when 99 % of the particles have a kinetic energy < this x m g d.
     settle_min_s, settle_max_s : float
@@ -798,6 +807,22 @@ def threads_range() -> str:
     return f"an integer in [1, {_available_cores()}], the cores this process may use"
 
 
+def default_skin(scene: Scene, dt: float) -> float:
+    """The Verlet-list skin a simulation of ``scene`` at time step ``dt`` (s) uses by default, m.
+
+    The list is rebuilt once a particle has moved skin / 2 since the last build, so the skin
+    is 2 x SKIN_REBUILD_STEPS x v_max x dt, v_max the upper impact speed
+    (:func:`millscope.stiffness.upper_impact_speed`), within SKIN_RANGE x the smallest
+    particle radius. At the paper's stiffness (dt about 2.6 us) that is the floor, 0.4 r_min;
+    the soft scales' steps are 10 to 30 times longer, and with the floor alone they would
+    rebuild the list every 5 to 15 steps.
+    """
+    r_min = float(np.min(scene.particle_radii()))
+    low, high = SKIN_RANGE
+    return float(np.clip(2.0 * SKIN_REBUILD_STEPS * upper_impact_speed(scene) * dt,
+                         low * r_min, high * r_min))
+
+
 def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
                  track_energy: bool) -> _core.Engine:
     drum = scene.drum
@@ -816,7 +841,8 @@ def _make_engine(scene: Scene, dt: float, threads: int, skin: float | None,
     materials = [_core.Material(m.density, m.shear_modulus, m.poisson) for m in scene.materials]
     return _core.Engine(materials, restitution, friction, scene.material_index(drum.material),
                         geometry, scene.particle_radii(), scene.particle_materials(), dt,
-                        gravity=scene.gravity, skin=0.0 if skin is None else skin,
+                        gravity=scene.gravity,
+                        skin=default_skin(scene, dt) if skin is None else skin,
                         clamp_normal=scene.clamp_normal_force, threads=threads,
                         track_energy=track_energy,
                         max_speed=SPEED_BOUND_FACTOR * upper_impact_speed(scene),
