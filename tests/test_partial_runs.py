@@ -182,3 +182,26 @@ def test_a_campaign_runs_two_sampling_twins_once(tmp_path: Path, reference: dict
     infos = [r.record.meta["campaign"] for r in results if r.record is not None]
     assert infos[0]["pid"] == infos[1]["pid"]
     assert infos[0]["wall_time_s"] == infos[1]["wall_time_s"]
+
+
+def test_a_twin_whose_run_brings_no_other_mode_is_failed_not_lost(tmp_path: Path) -> None:
+    """An executor whose results lack the other mode's samples (an older worker): the case it
+    ran is stored, its twin is recorded as failed with the reason, and a rerun retries it."""
+    from concurrent.futures import Future
+
+    class Stripping:
+        def submit(self, fn, case, *rest):  # noqa: ANN001, ANN202 - runs in the caller
+            future: Future = Future()
+            outcome = fn(case, *rest)
+            outcome.pop("other", None)
+            future.set_result(outcome)
+            return future
+
+    camp = ms.Campaign([tiny_case("instant"), tiny_case("mean")], tmp_path / "store",
+                       block=None)
+    first, second = camp.run(Stripping(), progress=False)
+    assert first.ok and second.status == "failed"
+    assert second.error is not None and "returned no samples in the other sampling mode" in \
+        second.error
+    again = camp.run(max_workers=1, progress=False)  # the failed twin is retried, alone
+    assert all(r.ok for r in again)

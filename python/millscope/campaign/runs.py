@@ -24,7 +24,8 @@ Every file is written atomically (a temporary file, then a rename), and only the
 called :meth:`Campaign.run` writes: workers return their record, so a dask cluster needs no
 shared file system. The files are the truth; the manifest is rebuilt from them at every start,
 so a campaign killed at any point resumes where it stopped and keeps every case whose file was
-written, and a long case killed half-way goes on from its last in-case checkpoint; a case file that cannot be read (:func:`unreadable_cases` says why) is computed again.
+written, and a long case killed half-way goes on from its last in-case checkpoint; a case file
+that cannot be read (:func:`unreadable_cases` says why) is computed again.
 The local pool's workers do not run the caller's main module (no ``__main__`` guard needed)
 and end when the campaign process ends, even when it is killed. A rerun skips finished cases
 and retries failed ones; a case that raises is recorded as failed and the others go on. Ctrl-C
@@ -422,14 +423,13 @@ class Campaign:
         futures: dict[Any, int] = {}
         done_before = sum(1 for d in self._hashes if entries[d]["status"] == "done")
         # A case whose twin also runs is stored from the twin's run (the engine samples both
-        # modes at once).
-        riders: dict[int, int] = {}
+        # modes at once): carries[k] is the twin that case k's run stores as well.
+        carries: dict[int, int] = {}
         for k in todo:
             twin = self._twins.get(k)
-            if twin is not None and twin in todo and k not in riders:
-                riders[twin] = k
-        todo = [k for k in todo if k not in riders]
-        carried = {k: twin for twin, k in riders.items()}
+            if twin is not None and twin in todo and k not in carries.values():
+                carries[k] = twin
+        todo = [k for k in todo if k not in carries.values()]
         try:
             with _bar(progress, len(self._cases), done_before) as bar:
                 partial = (None if checkpoint_every_s is None
@@ -446,8 +446,8 @@ class Campaign:
                                    "error": f"{type(exc).__name__}: {exc}",
                                    "traceback": _traceback_summary(exc), "wall_time_s": None}
                     entries[self._hashes[k]] = self._store_outcome(k, outcome)
-                    if k in carried:
-                        twin = carried[k]
+                    if k in carries:
+                        twin = carries[k]
                         entries[self._hashes[twin]] = self._store_outcome(
                             twin, _twin_outcome(outcome, self._hashes[twin]))
                         bar.update(1)
@@ -580,11 +580,12 @@ def read_store(store: str | os.PathLike[str], *, block: tuple[float, float] | No
 def _twin_outcome(outcome: Mapping[str, Any], digest: str) -> dict[str, Any]:
     """The outcome of the twin (case ``digest``, the other sampling mode) of a case's run: its
     samples in the other mode from the same steps, or the same failure."""
-    if outcome["status"] != "done":
-        return {**outcome, "hash": digest,
-                "error": f"its twin in the other sampling mode, which it runs with, failed: "
-                         f"{outcome.get('error')}"}
-    other = outcome["other"]
+    other = outcome.get("other")
+    if outcome["status"] != "done" or not isinstance(other, Mapping):
+        why = (f"failed: {outcome.get('error')}" if outcome["status"] != "done"
+               else "returned no samples in the other sampling mode")
+        return {**outcome, "status": "failed", "hash": digest, "traceback": None,
+                "error": f"its twin in the other sampling mode, whose run makes it, {why}"}
     meta = {**outcome["meta"], "sampling": other["sampling"]}
     return {**outcome, "hash": digest, "torque_Nm": other["torque_Nm"], "meta": meta}
 
