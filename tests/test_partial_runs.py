@@ -20,7 +20,6 @@ from millscope.campaign.partial import (
     PartialFiles,
     _Progress,
     _save,
-    case_simulation,
 )
 
 QUICK = RunSettings(duration_s=0.3, warm_up_s=0.05, settle_tolerance=10.0, settle_min_s=0.05,
@@ -36,7 +35,7 @@ def killed_after(case: Case, folder: Path, samples: int, extra: int = 0) -> Part
     """What a run killed after ``samples`` samples leaves: its checkpoint there and its
     samples, with ``extra`` samples more that were saved before the kill hit the checkpoint."""
     s = case.settings
-    sim = case_simulation(case)
+    sim = case.simulation()
     report = sim.settle(progress=False)
     done = _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, report)
     other = "mean" if s.sampling == "instant" else "instant"
@@ -84,7 +83,7 @@ def test_a_killed_case_goes_on_to_the_same_record(tmp_path: Path, reference: dic
     case = tiny_case(sampling)
     files = killed_after(case, tmp_path, samples) if samples else None
     if files is None:  # killed right after settling: a checkpoint with no samples
-        sim = case_simulation(case)
+        sim = case.simulation()
         report = sim.settle(progress=False)
         files = PartialFiles(tmp_path, case.hash())
         _save(files, sim, _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, report))
@@ -107,7 +106,8 @@ def test_saving_at_every_segment_changes_nothing(tmp_path: Path, reference: dict
     assert files.checkpoint.exists() and files.samples.exists()  # the campaign deletes them
 
 
-@pytest.mark.parametrize("damage", ["checkpoint", "samples", "other_case", "no_checkpoint"])
+@pytest.mark.parametrize("damage", ["checkpoint", "samples", "other_case", "too_long",
+                                    "no_checkpoint"])
 def test_unusable_files_are_set_aside(tmp_path: Path, reference: dict, damage: str) -> None:
     case = tiny_case()
     files = killed_after(case, tmp_path, 9)
@@ -124,6 +124,11 @@ def test_unusable_files_are_set_aside(tmp_path: Path, reference: dict, damage: s
         meta["hash"] = "0" * 64
         np.savez(files.samples, meta_json=np.array(json.dumps(meta)), time_s=t, torque_Nm=y,
                  other_Nm=o)
+    elif damage == "too_long":  # more samples than the case has: refused unread
+        with np.load(files.samples) as z:
+            meta_json, t = z["meta_json"], z["time_s"]
+        long = np.tile(t, 200)
+        np.savez(files.samples, meta_json=meta_json, time_s=long, torque_Nm=long, other_Nm=long)
     else:
         files.checkpoint.unlink()
     with warnings.catch_warnings(record=True) as caught:

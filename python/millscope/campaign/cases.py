@@ -16,7 +16,7 @@ from numbers import Integral
 from typing import Any, Literal, get_args
 
 from .. import _checks
-from ..engine.simulation import Sampling
+from ..engine.simulation import Sampling, Simulation
 from ..model.presets import CaseKey, case_key, paper_cases
 from ..model.scene import Scene
 from ..model.stiffness import time_step_limit
@@ -209,6 +209,14 @@ class Case:
     def hash(self) -> str:
         """sha256 (64 hex digits) of :meth:`canonical_json`: the case's name in a store."""
         return hashlib.sha256(self.canonical_json().encode("ascii")).hexdigest()
+
+    def simulation(self, *, track_energy: bool = False) -> Simulation:
+        """A new, empty :class:`~millscope.simulation.Simulation` of the case: its scene, seed,
+        time step, threads and settling criteria (``track_energy``: book the losses)."""
+        s = self.settings
+        return Simulation(self.scene, seed=s.seed, dt=s.dt, threads=s.threads,
+                          settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
+                          settle_max_s=s.settle_max_s, track_energy=track_energy)
 
 
 def case_matrix(scenes: Iterable[Scene], *, seeds: int | Iterable[int] | None = None,

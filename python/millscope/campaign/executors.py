@@ -25,7 +25,7 @@ from typing import Any
 from ..engine.simulation import Simulation
 from ..signal.record import TorqueRecord
 from .cases import Case
-from .partial import CHECKPOINT_EVERY_S, case_simulation, simulate_resumable
+from .partial import CHECKPOINT_EVERY_S, simulate_resumable
 
 __all__ = ["run_case", "simulate_case"]
 
@@ -116,7 +116,7 @@ def simulate_case(case: Case, *, track_energy: bool = False,
         is shorter and its ``meta["interrupted"]`` is true.
     """
     s = case.settings
-    sim = case_simulation(case, track_energy=track_energy)
+    sim = case.simulation(track_energy=track_energy)
     rec = sim.run(s.total_samples * s.sample_dt, sample_dt=s.sample_dt,
                   sampling=s.sampling,
                   progress=progress)

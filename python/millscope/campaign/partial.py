@@ -44,8 +44,7 @@ from ..engine.simulation import CheckpointError, Sampling, SettleReport, Simulat
 from ..signal.record import TorqueRecord
 from .cases import Case
 
-__all__ = ["CHECKPOINT_EVERY_S", "PARTIAL_DIR", "PartialFiles", "case_simulation",
-           "simulate_resumable"]
+__all__ = ["CHECKPOINT_EVERY_S", "PARTIAL_DIR", "PartialFiles", "simulate_resumable"]
 
 #: The folder of a store that holds the in-case checkpoints of unfinished cases.
 PARTIAL_DIR = "partial"
@@ -58,6 +57,7 @@ CHECKPOINT_EVERY_S = 600.0
 _SEGMENT_SAMPLES = 10
 _FORMAT = "millscope-partial-1"
 _MAX_META_BYTES = 64 * 1024
+_NPY_HEADER_BYTES = 1024  # an .npy member's header, at most (numpy writes 128 bytes)
 
 
 @dataclass(frozen=True)
@@ -108,15 +108,6 @@ class _Progress:
         self.other_Nm = np.concatenate([self.other_Nm, other.torque_Nm])
 
 
-def case_simulation(case: Case, *, track_energy: bool = False) -> Simulation:
-    """A new, empty :class:`~millscope.simulation.Simulation` of ``case``: its scene, seed,
-    time step, threads and settling criteria."""
-    s = case.settings
-    return Simulation(case.scene, seed=s.seed, dt=s.dt, threads=s.threads,
-                      settle_tolerance=s.settle_tolerance, settle_min_s=s.settle_min_s,
-                      settle_max_s=s.settle_max_s, track_energy=track_energy)
-
-
 def _prepare_folder(folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     ignore = folder / ".gitignore"
@@ -136,16 +127,20 @@ def _save(files: PartialFiles, sim: Simulation, done: _Progress) -> None:
     sim.save(files.checkpoint)
 
 
-def _read_samples(files: PartialFiles) -> _Progress:
-    """The samples file, checked field by field; ValueError saying what is wrong."""
+def _read_samples(files: PartialFiles, most_samples: int) -> _Progress:
+    """The samples file of a case of ``most_samples`` samples, checked field by field (no
+    member larger than those samples need is read); ValueError saying what is wrong."""
     with zipfile.ZipFile(files.samples) as zf:
         names = sorted(zf.namelist())
         if names != ["meta_json.npy", "other_Nm.npy", "time_s.npy", "torque_Nm.npy"]:
             raise ValueError(f"it holds {names}, not meta_json, time_s, torque_Nm and "
                              "other_Nm")
         for info in zf.infolist():
-            if info.file_size > _MAX_META_BYTES + 8 * 10**7:
-                raise ValueError(f"its member {info.filename} is {info.file_size} bytes")
+            most = _NPY_HEADER_BYTES + (_MAX_META_BYTES if info.filename == "meta_json.npy"
+                                        else 8 * most_samples)
+            if info.file_size > most:
+                raise ValueError(f"its member {info.filename} is {info.file_size} bytes, more "
+                                 f"than the {most} its case can need")
     with np.load(files.samples, allow_pickle=False) as data:
         meta = json.loads(str(data["meta_json"][()]))
         t = np.asarray(data["time_s"])
@@ -182,7 +177,7 @@ def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | N
         return None
     s = case.settings
     try:
-        done = _read_samples(files)
+        done = _read_samples(files, s.total_samples)
         sim = Simulation.load(files.checkpoint, threads=s.threads)
         if (sim.scene.to_dict() != case.scene.to_dict() or sim.seed != s.seed
                 or (s.dt is not None and sim.dt != s.dt)):
@@ -237,7 +232,7 @@ def simulate_resumable(case: Case, folder: Path, *,
     start = time.perf_counter()
     resumed = _resume(case, files)
     if resumed is None:
-        sim = case_simulation(case)
+        sim = case.simulation()
         done = _Progress(np.empty(0), np.empty(0), np.empty(0), 0.0, None)
     else:
         sim, done = resumed
