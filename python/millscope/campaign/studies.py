@@ -166,13 +166,8 @@ def run_study(plan: StudyPlan, store: str | os.PathLike[str], *, executor: Any =
         raise _checks.fail("plan", plan, "a StudyPlan")
     _checks.flag("cheapest_first", cheapest_first)
     sign = 1.0 if cheapest_first else -1.0
-
-    def cost(i: int) -> float:
-        _, _, _, case = plan._cases[i]
-        assert case.settings.dt is not None  # set for every case of a study
-        return sign * case.scene.n_particles * case.settings.duration_s / case.settings.dt
-
-    order = sorted((i for i in range(len(plan.cases())) if plan.donor(i) is None), key=cost)
+    order = sorted((i for i in range(len(plan.cases())) if plan.donor(i) is None),
+                   key=lambda i: sign * plan.case_particle_steps(i))
     campaign = Campaign([plan._cases[i][3] for i in order], store, block=None)
     if executor is None and max_workers is None:
         max_workers = 1

@@ -405,13 +405,16 @@ class StudyPlan:
         """Particles x time steps of the rotation (warm-up and block) one seed of ``setting``
         runs, summed over the load levels; settling, which only the run tells, is not
         counted."""
-        total = 0.0
-        for k, _, seed, case in self._cases:
-            if self.settings[k] == setting and seed == self.seeds[0]:
-                dt = case.settings.dt
-                assert dt is not None  # set for every case of a study
-                total += case.scene.n_particles * setting.duration_s / dt
-        return total
+        return sum(self.case_particle_steps(i) for i, (k, _, seed, _) in enumerate(self._cases)
+                   if self.settings[k] == setting and seed == self.seeds[0])
+
+    def case_particle_steps(self, index: int) -> float:
+        """Particles x time steps of the rotation (warm-up and block) case ``index`` of
+        :meth:`cases` runs; settling is not counted."""
+        case = self._cases[index][3]
+        dt = case.settings.dt
+        assert dt is not None  # set for every case of a study
+        return case.scene.n_particles * case.settings.duration_s / dt
 
     # -- ladders -------------------------------------------------------------------------------
     @classmethod
