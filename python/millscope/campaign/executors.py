@@ -157,13 +157,10 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
         s = c.settings
         # A case keeps the torque alone: the energy ledger would cost a quarter of the run
         # and change nothing in it (Simulation, track_energy).
-        if partial_dir is None:
-            sim, rec = simulate_case(c)
-            records, wall = sim.last_records, None
-        else:
-            sim, records, wall = simulate_resumable(c, Path(partial_dir),
-                                                    checkpoint_every_s=checkpoint_every_s)
-            rec = records[s.sampling]
+        sim, records, wall = simulate_resumable(
+            c, None if partial_dir is None else Path(partial_dir),
+            checkpoint_every_s=checkpoint_every_s)
+        rec = records[s.sampling]
         other = next(mode for mode in records if mode != s.sampling)
         if rec.meta.get("interrupted") or len(rec) != s.total_samples:
             raise RuntimeError(f"the run was interrupted after {len(rec)} of "
@@ -175,7 +172,7 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
                 "torque_Nm": rec.torque_Nm[s.warm_up_samples:], "meta": meta,
                 "other": {"sampling": other,
                           "torque_Nm": records[other].torque_Nm[s.warm_up_samples:]},
-                "wall_time_s": time.perf_counter() - start if wall is None else wall, **where}
+                "wall_time_s": wall, **where}
     except Exception as exc:  # a failing case is reported, not raised
         return {"status": "failed", "hash": digest, "error": f"{type(exc).__name__}: {exc}",
                 "traceback": _traceback_summary(exc),

@@ -201,7 +201,7 @@ def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | N
     return sim, done
 
 
-def simulate_resumable(case: Case, folder: Path, *,
+def simulate_resumable(case: Case, folder: Path | None, *,
                        checkpoint_every_s: float = CHECKPOINT_EVERY_S,
                        ) -> tuple[Simulation, dict[Sampling, TorqueRecord], float]:
     """Runs ``case`` (fill, settle, the whole ``duration_s``) from where a killed run left it
@@ -210,8 +210,9 @@ def simulate_resumable(case: Case, folder: Path, *,
     Parameters
     ----------
     case : Case
-    folder : Path
-        The partial folder (made if missing).
+    folder : Path or None
+        The partial folder (made if missing); None: the case runs from the start and saves
+        nothing.
     checkpoint_every_s : float
         Wall-clock time between two saves, s, >= 0 (0: after every few samples). A save that
         fails (a full disk, a folder not writable) warns once and the run goes on without
@@ -228,20 +229,21 @@ def simulate_resumable(case: Case, folder: Path, *,
         saved stays for the next run.
     """
     s = case.settings
-    files = PartialFiles(Path(folder), case.hash())
+    files = None if folder is None else PartialFiles(Path(folder), case.hash())
     start = time.perf_counter()
-    resumed = _resume(case, files)
+    resumed = None if files is None else _resume(case, files)
     if resumed is None:
         sim = case.simulation()
         done = _Progress(np.empty(0), np.empty(0), np.empty(0), 0.0, None)
     else:
         sim, done = resumed
     spent_before = done.wall_time_s
-    saving = True
+    saving = files is not None
     last_save = start
 
     def save() -> None:
         nonlocal saving, last_save
+        assert files is not None  # saving only with a folder
         done.wall_time_s = spent_before + time.perf_counter() - start
         try:
             _save(files, sim, done)
