@@ -89,8 +89,9 @@ MAX_OVERLAP_FRACTION = 1.0
 #: The default Verlet-list skin (:func:`default_skin`): the list is rebuilt once a particle
 #: has moved half the skin, and a particle at the upper impact speed should need at least
 #: SKIN_REBUILD_STEPS steps for that; the skin stays within SKIN_RANGE x the smallest radius
-#: (0.4 r_min is what the LIGGGHTS yardstick uses, and more than about 1.2 r_min lists so many
-#: pairs that the pair search costs more than the rebuilds it saves).
+#: (0.4 r_min is what the LIGGGHTS yardstick uses; the pairs listed grow as the cube of the
+#: contact distance plus the skin, so a much larger skin makes every step's pair search pay
+#: for the rebuilds it saves).
 SKIN_REBUILD_STEPS = 10
 SKIN_RANGE = (0.4, 1.2)
 #: Engine work handed to C++ in one call, in particle-steps and in steps (a step has a cost of
