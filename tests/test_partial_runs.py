@@ -6,16 +6,18 @@ Cases are the balls-only tiny pilot mill (391 balls), settled for 0.05 s and run
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import warnings
+from concurrent.futures import Future
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import millscope as ms
-from millscope.campaign import Case, RunSettings, run_case
+from millscope.campaign import Case, RunSettings, run_case, runs
 from millscope.campaign.executors import simulate_case
 from millscope.campaign.partial import (
     PARTIAL_DIR,
@@ -200,8 +202,6 @@ def test_a_campaign_runs_two_sampling_twins_once(tmp_path: Path, reference: dict
 def test_a_twin_whose_run_brings_no_other_mode_is_failed_not_lost(tmp_path: Path) -> None:
     """An executor whose results lack the other mode's samples (an older worker): the case it
     ran is stored, its twin is recorded as failed with the reason, and a rerun retries it."""
-    from concurrent.futures import Future
-
     class Stripping:
         def submit(self, fn, case, *rest):  # noqa: ANN001, ANN202 - runs in the caller
             future: Future = Future()
@@ -218,3 +218,70 @@ def test_a_twin_whose_run_brings_no_other_mode_is_failed_not_lost(tmp_path: Path
         second.error
     again = camp.run(max_workers=1, progress=False)  # the failed twin is retried, alone
     assert all(r.ok for r in again)
+
+
+def test_the_saved_share_is_what_the_last_checkpoint_holds(tmp_path: Path) -> None:
+    from millscope.campaign.partial import saved_share
+
+    case = tiny_case()
+    files = PartialFiles(tmp_path, case.hash())
+    assert saved_share(files, case.settings.total_samples) is None  # nothing saved yet
+    killed_after(case, tmp_path, 12)
+    assert saved_share(files, case.settings.total_samples) == 12 / case.settings.total_samples
+    files.samples.write_bytes(b"half written")
+    assert saved_share(files, case.settings.total_samples) is None
+
+
+def test_the_campaign_bar_shows_how_far_a_long_case_has_saved(tmp_path: Path) -> None:
+    """A case under way is shown by its last checkpoint's share of its samples, beside the
+    failed cases; an executor that answers only after its case was saved makes the bar tick
+    on it."""
+
+    notes: list[str] = []
+
+    class Recording:
+        def __init__(self, **kwargs: object) -> None:
+            self.kwargs = kwargs
+
+        def __enter__(self) -> Recording:
+            return self
+
+        def __exit__(self, *exc: object) -> None:
+            return None
+
+        def set_postfix_str(self, text: str, refresh: bool = True) -> None:
+            notes.append(text)
+
+        def refresh(self) -> None:
+            return None
+
+        def update(self, n: int) -> None:
+            return None
+
+    class Slow:
+        """Saves 12 samples of the case as a killed run would, then lets the campaign wait
+        one tick before the result comes."""
+
+        def submit(self, fn, case, partial, every):  # noqa: ANN001, ANN202
+            killed_after(Case.from_dict(case), Path(partial), 12)
+            self.future: Future = Future()
+            self.outcome = fn(case, partial, every)
+            return self.future
+
+    slow = Slow()
+    real_completed = runs._completed
+
+    def completed(executor, futures, tick=None):  # noqa: ANN001, ANN202
+        assert tick is not None
+        tick()  # the campaign waits: the bar shows the saved share
+        slow.future.set_result(slow.outcome)
+        yield from real_completed(executor, futures, tick)
+
+    camp = ms.Campaign([tiny_case()], tmp_path / "store", block=None)
+    total = camp.cases[0].settings.total_samples
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(runs, "_completed", completed)
+        mp.setattr(runs, "_bar", lambda *a: contextlib.nullcontext(Recording()))
+        assert camp.run(slow, progress=False)[0].ok
+    assert notes[0] == f"saved {100 * 12 / total:.0f} %"
+    assert notes[-1] == ""  # the case is done: nothing under way

@@ -44,7 +44,8 @@ from ..engine.simulation import CheckpointError, Sampling, SettleReport, Simulat
 from ..signal.record import TorqueRecord
 from .cases import Case
 
-__all__ = ["CHECKPOINT_EVERY_S", "PARTIAL_DIR", "PartialFiles", "simulate_resumable"]
+__all__ = ["CHECKPOINT_EVERY_S", "PARTIAL_DIR", "PartialFiles", "saved_share",
+           "simulate_resumable"]
 
 #: The folder of a store that holds the in-case checkpoints of unfinished cases.
 PARTIAL_DIR = "partial"
@@ -106,6 +107,18 @@ class _Progress:
         self.time_s = np.concatenate([self.time_s, mine.time_s])
         self.torque_Nm = np.concatenate([self.torque_Nm, mine.torque_Nm])
         self.other_Nm = np.concatenate([self.other_Nm, other.torque_Nm])
+
+
+def saved_share(files: PartialFiles, total_samples: int) -> float | None:
+    """The share of a case's ``total_samples`` samples its last in-case checkpoint holds, in
+    [0, 1], or None when it has none (or its samples file cannot be read now: it is a
+    progress report, never an input)."""
+    try:
+        with np.load(files.samples, allow_pickle=False) as data:
+            taken = int(data["time_s"].shape[0])
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile):
+        return None
+    return min(1.0, taken / total_samples)
 
 
 def _prepare_folder(folder: Path) -> None:

@@ -69,7 +69,7 @@ from .executors import (
     _WorkerContext,
     run_case,
 )
-from .partial import CHECKPOINT_EVERY_S, PARTIAL_DIR, PartialFiles
+from .partial import CHECKPOINT_EVERY_S, PARTIAL_DIR, PartialFiles, saved_share
 from .store import (
     _case_path,
     _entry,
@@ -437,7 +437,25 @@ class Campaign:
                 for k in todo:
                     futures[executor.submit(run_case, self._cases[k].to_dict(), partial,
                                             checkpoint_every_s or 0.0)] = k
-                for future in _completed(executor, list(futures), bar.refresh):
+                def tick() -> None:
+                    """The bar's note: the failed cases, and how far the cases under way
+                    are by their last in-case checkpoints (long cases move the bar only
+                    when they end)."""
+                    shares = [] if partial is None else [
+                        saved_share(PartialFiles(Path(partial), self._hashes[k]),
+                                    self._cases[k].settings.total_samples)
+                        for f, k in futures.items() if not f.done()]
+                    failed = sum(1 for d in self._hashes if entries[d]["status"] == "failed")
+                    saved = [f"{100 * x:.0f} %" for x in shares if x is not None]
+                    notes = []
+                    if failed:
+                        notes.append(f"failed={failed}")
+                    if saved:
+                        notes.append("saved " + ", ".join(saved))
+                    bar.set_postfix_str(", ".join(notes), refresh=False)
+                    bar.refresh()
+
+                for future in _completed(executor, list(futures), tick):
                     k = futures[future]
                     try:
                         outcome = future.result()
@@ -453,9 +471,7 @@ class Campaign:
                         bar.update(1)
                     _write_manifest(self._store, entries, self._analysis)
                     bar.update(1)
-                    if outcome["status"] == "failed":
-                        bar.set_postfix(failed=sum(
-                            1 for d in self._hashes if entries[d]["status"] == "failed"))
+                    tick()
         except BaseException:
             for future in futures:
                 future.cancel()
