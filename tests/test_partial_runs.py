@@ -44,12 +44,12 @@ def killed_after(case: Case, folder: Path, samples: int, extra: int = 0) -> Part
     done = _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, report)
     other = "mean" if s.sampling == "instant" else "instant"
     sim.run(samples * s.sample_dt, s.sample_dt, s.sampling, progress=False)
-    done.extend((sim.last_records[s.sampling], sim.last_records[other]))
+    done.extend([(sim.last_records[s.sampling], sim.last_records[other])])
     files = PartialFiles(folder, case.hash())
     _save(files, sim, done)
     if extra:
         sim.run(extra * s.sample_dt, s.sample_dt, s.sampling, progress=False)
-        done.extend((sim.last_records[s.sampling], sim.last_records[other]))
+        done.extend([(sim.last_records[s.sampling], sim.last_records[other])])
         checkpoint = files.checkpoint.read_bytes()
         _save(files, sim, done)
         files.checkpoint.write_bytes(checkpoint)  # the kill came before the new checkpoint

@@ -408,7 +408,7 @@ def table6_markdown(groups: Sequence[GroupAnalysis]) -> str:
             "|---|---|---|---|---|---|---|---|---|"]
     for g in groups:
         source = ", ".join(sorted(set(g.interval_source)))
-        paper = PAPER_TABLE_6.get(g.name.split("-")[0])
+        paper = PAPER_TABLE_6.get(g.name.removesuffix(f"-{g.sampling}"))
         published = ("-" if paper is None
                      else f"y = {paper[0]:g} ln(x) + {paper[1]:g}, R² = {paper[2]:g}")
         if g.fit is None:

@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-from ..engine.simulation import Simulation
+from ..engine.simulation import Simulation, other_sampling
 from ..signal.record import TorqueRecord
 from .cases import Case
 from .partial import CHECKPOINT_EVERY_S, simulate_resumable
@@ -161,7 +161,7 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
             c, None if partial_dir is None else Path(partial_dir),
             checkpoint_every_s=checkpoint_every_s)
         rec = records[s.sampling]
-        other = next(mode for mode in records if mode != s.sampling)
+        other = other_sampling(s.sampling)
         if rec.meta.get("interrupted") or len(rec) != s.total_samples:
             raise RuntimeError(f"the run was interrupted after {len(rec)} of "
                                f"{s.total_samples} samples")

@@ -40,7 +40,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._files import atomic_write
-from ..engine.simulation import CheckpointError, Sampling, SettleReport, Simulation
+from ..engine.simulation import (
+    CheckpointError,
+    Sampling,
+    SettleReport,
+    Simulation,
+    other_sampling,
+)
 from ..signal.record import TorqueRecord
 from .cases import Case
 
@@ -101,12 +107,15 @@ class _Progress:
         self.time_s, self.torque_Nm = self.time_s[:taken], self.torque_Nm[:taken]
         self.other_Nm = self.other_Nm[:taken]
 
-    def extend(self, records: tuple[TorqueRecord, TorqueRecord]) -> None:
-        """Appends a run's records (the case's sampling mode, the other)."""
-        mine, other = records
-        self.time_s = np.concatenate([self.time_s, mine.time_s])
-        self.torque_Nm = np.concatenate([self.torque_Nm, mine.torque_Nm])
-        self.other_Nm = np.concatenate([self.other_Nm, other.torque_Nm])
+    def extend(self, runs: list[tuple[TorqueRecord, TorqueRecord]]) -> None:
+        """Appends runs' records (each: the case's sampling mode, the other), in one copy."""
+        if runs:
+            self.time_s = np.concatenate([self.time_s, *(mine.time_s for mine, _ in runs)])
+            self.torque_Nm = np.concatenate([self.torque_Nm,
+                                             *(mine.torque_Nm for mine, _ in runs)])
+            self.other_Nm = np.concatenate([self.other_Nm,
+                                            *(other.torque_Nm for _, other in runs)])
+            runs.clear()
 
 
 def saved_share(files: PartialFiles, total_samples: int) -> float | None:
@@ -271,23 +280,30 @@ def simulate_resumable(case: Case, folder: Path | None, *,
         done.settle = sim.settle(progress=False)
         if saving and time.perf_counter() - last_save >= checkpoint_every_s:
             save()
-    other: Sampling = "mean" if s.sampling == "instant" else "instant"
+    other = other_sampling(s.sampling)
     interrupted = False
     metas: dict[Sampling, dict[str, object]] = {}
-    while len(done.time_s) < s.total_samples and not interrupted:
-        left = s.total_samples - len(done.time_s)
+    # The runs since the last save, joined to the samples only when they are saved or at the
+    # end: joining at every run would copy the whole record each time.
+    pending: list[tuple[TorqueRecord, TorqueRecord]] = []
+    taken = len(done.time_s)
+    while taken < s.total_samples and not interrupted:
+        left = s.total_samples - taken
         count = left if left < 2 * _SEGMENT_SAMPLES else _SEGMENT_SAMPLES
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # the interruption is reported
             sim.run(count * s.sample_dt, sample_dt=s.sample_dt, sampling=s.sampling,
                     progress=False)
         records = sim.last_records
-        done.extend((records[s.sampling], records[other]))
+        pending.append((records[s.sampling], records[other]))
+        taken += len(records[s.sampling])
         metas = {mode: rec.meta for mode, rec in records.items()}
         interrupted = bool(metas[s.sampling].get("interrupted"))
-        if saving and not interrupted and len(done.time_s) < s.total_samples and \
+        if saving and not interrupted and taken < s.total_samples and \
                 time.perf_counter() - last_save >= checkpoint_every_s:
+            done.extend(pending)
             save()
+    done.extend(pending)
     wall = spent_before + time.perf_counter() - start
     out = {s.sampling: TorqueRecord(done.time_s, done.torque_Nm, metas[s.sampling]),
            other: TorqueRecord(done.time_s, done.other_Nm, metas[other])}

@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING, Any
 from .. import _checks, _core
 from .._files import atomic_write
 from .._frames import frame
-from ..engine.simulation import _available_cores
+from ..engine.simulation import _available_cores, other_sampling
 from ..model.scene import Scene
 from ..signal.analysis import WINDOWS, AnalysisSettings
 from ..signal.record import TorqueRecord
@@ -167,8 +167,8 @@ class Campaign:
         # from the same steps, so one run stores both.
         self._twins: dict[int, int] = {}
         for k, c in enumerate(out):
-            other = "mean" if c.settings.sampling == "instant" else "instant"
-            twin = first.get(Case(c.scene, c.settings.replace(sampling=other)).hash())
+            twin = first.get(Case(c.scene, c.settings.replace(
+                sampling=other_sampling(c.settings.sampling))).hash())
             if twin is not None:
                 self._twins[k] = twin
 
@@ -425,11 +425,13 @@ class Campaign:
         # A case whose twin also runs is stored from the twin's run (the engine samples both
         # modes at once): carries[k] is the twin that case k's run stores as well.
         carries: dict[int, int] = {}
+        waiting = set(todo)
         for k in todo:
             twin = self._twins.get(k)
-            if twin is not None and twin in todo and k not in carries.values():
+            if twin is not None and twin in waiting and k in waiting:
                 carries[k] = twin
-        todo = [k for k in todo if k not in carries.values()]
+                waiting.discard(twin)
+        todo = [k for k in todo if k in waiting]
         try:
             with _bar(progress, len(self._cases), done_before) as bar:
                 partial = (None if checkpoint_every_s is None
@@ -437,22 +439,11 @@ class Campaign:
                 for k in todo:
                     futures[executor.submit(run_case, self._cases[k].to_dict(), partial,
                                             checkpoint_every_s or 0.0)] = k
+
                 def tick() -> None:
-                    """The bar's note: the failed cases, and how far the cases under way
-                    are by their last in-case checkpoints (long cases move the bar only
-                    when they end)."""
-                    shares = [] if partial is None else [
-                        saved_share(PartialFiles(Path(partial), self._hashes[k]),
-                                    self._cases[k].settings.total_samples)
-                        for f, k in futures.items() if not f.done()]
-                    failed = sum(1 for d in self._hashes if entries[d]["status"] == "failed")
-                    saved = [f"{100 * x:.0f} %" for x in shares if x is not None]
-                    notes = []
-                    if failed:
-                        notes.append(f"failed={failed}")
-                    if saved:
-                        notes.append("saved " + ", ".join(saved))
-                    bar.set_postfix_str(", ".join(notes), refresh=False)
+                    running = [k for f, k in futures.items() if not f.done()]
+                    bar.set_postfix_str(self._bar_note(running, entries, partial),
+                                        refresh=False)
                     bar.refresh()
 
                 for future in _completed(executor, list(futures), tick):
@@ -484,6 +475,20 @@ class Campaign:
             # From the files, not from ``entries``: a Ctrl-C between storing a case and
             # booking it would otherwise leave the manifest a case behind the store.
             _write_manifest(self._store, self._entries(_scan(self._store)), self._analysis)
+
+    def _bar_note(self, running: list[int], entries: Mapping[str, Mapping[str, Any]],
+                  partial: str | None) -> str:
+        """The progress bar's note: the failed cases, and how far the cases under way are by
+        their last in-case checkpoints (a long case moves the bar only when it ends)."""
+        shares = [] if partial is None else [
+            saved_share(PartialFiles(Path(partial), self._hashes[k]),
+                        self._cases[k].settings.total_samples) for k in running]
+        failed = sum(1 for d in self._hashes if entries[d]["status"] == "failed")
+        saved = [f"{100 * x:.0f} %" for x in shares if x is not None]
+        notes = [f"failed={failed}"] if failed else []
+        if saved:
+            notes.append("saved " + ", ".join(saved))
+        return ", ".join(notes)
 
     def _store_outcome(self, k: int, outcome: Mapping[str, Any]) -> dict[str, Any]:
         """Writes a worker's outcome for case ``k``; returns its manifest entry."""

@@ -70,6 +70,12 @@ __all__ = ["CheckpointError", "Energies", "LedgerOffError", "Sampling", "SettleR
 #: how a torque sample is taken: the value at its instant, or the mean over its interval
 Sampling = Literal["instant", "mean"]
 
+
+def other_sampling(mode: Sampling) -> Sampling:
+    """The other sampling mode ("mean" for "instant" and back): the engine takes both from
+    the same steps (:attr:`Simulation.last_records`)."""
+    return "mean" if mode == "instant" else "instant"
+
 _T = TypeVar("_T")
 
 CHECKPOINT_FORMAT = "millscope-checkpoint-3"  # 2: the ledger holds "dissipated"; 3: "order"
@@ -568,7 +574,7 @@ class Simulation:
                           stacklevel=2)
         data = np.concatenate(rows) if rows else np.empty((0, 9))
         self.last_parts = {"shell": data[:, 2], "lifters": data[:, 3], "ends": data[:, 4]}
-        other: Sampling = "instant" if sampling == "mean" else "mean"
+        other = other_sampling(sampling)
         self.last_records = {
             sampling: TorqueRecord(data[:, 0], data[:, 1],
                                    self._meta(sample_dt, sampling, interrupted)),
