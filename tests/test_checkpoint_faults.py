@@ -180,6 +180,17 @@ def test_a_truncated_checkpoint_is_refused(saved: Saved, tmp_path: Path) -> None
             ms.Simulation.load(path)
 
 
+def test_a_compressed_checkpoint_is_smaller_and_continues_the_same(saved: Saved,
+                                                                   tmp_path: Path) -> None:
+    """save(compress=True) of the loaded state: fewer bytes, every member deflated, and the
+    same continuation to the bit as the file saved plain."""
+    path = ms.Simulation.load(saved[0]).save(tmp_path / "deflated.npz", compress=True)
+    with zipfile.ZipFile(path) as z:
+        assert {info.compress_type for info in z.infolist()} == {zipfile.ZIP_DEFLATED}
+    assert path.stat().st_size < saved[0].stat().st_size
+    np.testing.assert_array_equal(continuation(path), saved[1])
+
+
 def test_the_unedited_checkpoint_continues_the_same(saved: Saved, tmp_path: Path) -> None:
     """The reference of the family below: a rewrite of the very same fields loads and
     continues to the bit (so an edit that changes nothing is not refused)."""

@@ -627,12 +627,22 @@ class Simulation:
         }
 
     # -- checkpoints -------------------------------------------------------------------------
-    def save(self, path: str | os.PathLike[str]) -> Path:
+    def save(self, path: str | os.PathLike[str], *, compress: bool = False) -> Path:
         """Writes the full state (a checkpoint) to ``path`` (.npz), atomically.
 
         A simulation loaded from it and run on the same number of threads continues exactly
         (bit for bit) as this one would.
+
+        Parameters
+        ----------
+        path : path
+            The file to write.
+        compress : bool
+            Deflate the arrays (:func:`numpy.savez_compressed`): a paper-scale checkpoint
+            takes about half the bytes, at the cost of a fraction of a second to write it.
+            :meth:`load` reads either kind.
         """
+        _checks.flag("compress", compress)
         snap = self._engine.snapshot()
         arrays = {k: np.asarray(v) for k, v in snap.items() if isinstance(v, np.ndarray)}
         scalars = {k: v for k, v in snap.items() if not isinstance(v, np.ndarray)}
@@ -655,7 +665,8 @@ class Simulation:
         with atomic_write(path, "wb") as f:
             # allow_pickle=False: the snapshot holds numeric arrays only (and no array key can
             # take the place of the keyword)
-            np.savez(f, allow_pickle=False, meta_json=np.array(json.dumps(meta)), **arrays)
+            write = np.savez_compressed if compress else np.savez
+            write(f, allow_pickle=False, meta_json=np.array(json.dumps(meta)), **arrays)
         return path
 
     @classmethod
