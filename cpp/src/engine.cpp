@@ -277,7 +277,8 @@ double Engine::bytes_per_particle() const {
   total += bytes(mat_) + bytes(wall_block_) + bytes(wall_lifter_) + bytes(wall_held_) +
            bytes(order_) + bytes(lifter_reach_);
   for (const auto& b : buffers_) total += bytes(b);
-  total += static_cast<double>(list_.bytes()) + bytes(list_moved_) + bytes(row_split_) +
+  total += static_cast<double>(list_.bytes()) + bytes(list_moved_) + bytes(touch_dist2_) +
+           bytes(row_split_) +
            bytes(particle_split_) + bytes(buffer_end_);
   return total / static_cast<double>(n_);
 }
@@ -649,6 +650,7 @@ void Engine::restore(const Snapshot& s) {
   // valid (refresh_walls). With the list not yet built (an engine that never stepped), the
   // first step builds it, and splits the rows among the threads.
   if (list_.builds() > 0) {
+    Access::list_touch_distances(*this);
     Access::split_rows(*this);
     Access::split_particles(*this);
     Access::refresh_walls(*this);
@@ -695,6 +697,7 @@ void Engine::Access::rebuild_end(Engine& e) {
     e.y_ref_[i] = static_cast<float>(e.y_[i]);
     e.z_ref_[i] = static_cast<float>(e.z_[i]);
   }
+  list_touch_distances(e);
   split_rows(e);
   split_particles(e);
 }
@@ -761,6 +764,18 @@ void Engine::Access::split_particles(Engine& e) {
   split_by_cost(cost, static_cast<std::size_t>(e.threads_), e.particle_split_);
 }
 
+void Engine::Access::list_touch_distances(Engine& e) {
+  const auto& start = e.list_.start();
+  const auto& partner = e.list_.partner();
+  e.touch_dist2_.assign(partner.size() + max_search_lanes, 0.0);
+  for (std::size_t i = 0; i + 1 < start.size(); ++i) {
+    for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
+      const double r_sum = e.r_[i] + e.r_[partner[s]];
+      e.touch_dist2_[s] = r_sum * r_sum;
+    }
+  }
+}
+
 void Engine::Access::split_rows(Engine& e) {
   // Rows go to threads in contiguous blocks of about equal cost: a row costs 1 for each
   // listed pair, touching_pair_cost for one that touched at the list build.
@@ -773,9 +788,8 @@ void Engine::Access::split_rows(Engine& e) {
       const std::size_t j = partner[s];
       const double dx = static_cast<double>(e.x_ref_[i]) - e.x_ref_[j],
                    dy = static_cast<double>(e.y_ref_[i]) - e.y_ref_[j],
-                   dz = e.list_.wrap_dz(static_cast<double>(e.z_ref_[i]) - e.z_ref_[j]),
-                   r_sum = e.r_[i] + e.r_[j];
-      cost[i] += dx * dx + dy * dy + dz * dz < r_sum * r_sum ? touching_pair_cost : 1.0;
+                   dz = e.list_.wrap_dz(static_cast<double>(e.z_ref_[i]) - e.z_ref_[j]);
+      cost[i] += dx * dx + dy * dy + dz * dz < e.touch_dist2_[s] ? touching_pair_cost : 1.0;
     }
   }
   split_by_cost(cost, team, e.row_split_);

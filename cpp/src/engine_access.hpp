@@ -22,6 +22,7 @@ struct Engine::Access {
   static void rebuild_begin(Engine& e, int team);
   static void rebuild_end(Engine& e);
   static void refresh_walls(Engine& e);
+  static void list_touch_distances(Engine& e);
   static void split_rows(Engine& e);
   static void split_particles(Engine& e);
   static std::string describe_bad(const Engine& e, std::size_t i);

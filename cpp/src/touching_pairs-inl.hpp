@@ -77,7 +77,7 @@ template <bool Periodic, bool Prefetch>
 std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
                                 const std::uint32_t* start, const std::uint32_t* partner,
                                 const double* x, const double* y, const double* z,
-                                const double* r, std::size_t n, double period,
+                                const double* touch2, std::size_t n, double period,
                                 std::uint32_t* slot_row, const TouchingPairs& out,
                                 const PartnerPrefetch& ahead) {
   const hn::ScalableTag<double> d;             // the positions, N lanes
@@ -134,25 +134,22 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
     const auto rows = hn::IfThenElse(hn::FirstN(du, live_count), hn::LoadU(du, slot_row + s),
                                      base_v);
     const auto rel = hn::Sub(rows, base_v);
-    hn::Vec<decltype(d)> xi, yi, zi, ri;
+    hn::Vec<decltype(d)> xi, yi, zi;
     if (base + lanes <= n && hn::AllTrue(du, hn::Lt(rel, window))) {
       const auto idx = hn::IndicesFromVec(d, hn::BitCast(di64, hn::PromoteTo(du64, rel)));
       xi = hn::TableLookupLanes(hn::LoadU(d, x + base), idx);
       yi = hn::TableLookupLanes(hn::LoadU(d, y + base), idx);
       zi = hn::TableLookupLanes(hn::LoadU(d, z + base), idx);
-      ri = hn::TableLookupLanes(hn::LoadU(d, r + base), idx);
     } else {
       const auto idx = hn::BitCast(di64, hn::PromoteTo(du64, rows));
       xi = hn::GatherIndex(d, x, idx);
       yi = hn::GatherIndex(d, y, idx);
       zi = hn::GatherIndex(d, z, idx);
-      ri = hn::GatherIndex(d, r, idx);
     }
     const auto jdx = hn::BitCast(di64, hn::PromoteTo(du64, j));
     const auto xj = hn::GatherIndex(d, x, jdx);
     const auto yj = hn::GatherIndex(d, y, jdx);
     const auto zj = hn::GatherIndex(d, z, jdx);
-    const auto rj = hn::GatherIndex(d, r, jdx);
     const auto dx = hn::Sub(xi, xj);
     const auto dy = hn::Sub(yi, yj);
     auto dz = hn::Sub(zi, zj);
@@ -161,9 +158,8 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
     }
     // Touching: dx^2 + dy^2 + dz^2 < (r_i + r_j)^2, summed left to right as the portable
     // search does; a NaN does not touch.
-    const auto r_sum = hn::Add(ri, rj);
     const auto d2 = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
-    const auto touch = hn::And(live, hn::Lt(d2, hn::Mul(r_sum, r_sum)));
+    const auto touch = hn::And(live, hn::Lt(d2, hn::LoadU(d, touch2 + s0 + s)));
     // The index vectors have lanes half as wide as the doubles: they take the mask as bits.
     std::uint8_t bits[(max_search_lanes + 7) / 8];
     hn::StoreMaskBits(d, touch, bits);

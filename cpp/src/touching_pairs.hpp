@@ -52,15 +52,17 @@ struct PartnerPrefetch {
 
 /// The wide search: the touching pairs of the Verlet list rows [first_row, end_row) (half list:
 /// row i's partners partner[start[i]..start[i + 1])), in list order, into `out`; returns how
-/// many. x, y, z (m) and r (m) hold the n particles. Periodic (the template's first flag):
+/// many. x, y, z (m) hold the n particles' centres; touch2 (m^2), by list slot, each listed
+/// pair's (r_i + r_j)^2, with room for max_search_lanes beyond the block's last listed pair
+/// (whole vectors are loaded). Periodic (the template's first flag):
 /// z differences wrap by `period` (m), as dz - period * nearbyint(dz / period). `slot_row` is
 /// scratch for the rows' listed pairs, with room for max_search_lanes beyond them. Prefetching
 /// (the second flag): asks for what `ahead` names as it goes.
 using TouchingPairsSearch = std::size_t (*)(std::size_t first_row, std::size_t end_row,
                                             const std::uint32_t* start,
                                             const std::uint32_t* partner, const double* x,
-                                            const double* y, const double* z, const double* r,
-                                            std::size_t n, double period,
+                                            const double* y, const double* z,
+                                            const double* touch2, std::size_t n, double period,
                                             std::uint32_t* slot_row, const TouchingPairs& out,
                                             const PartnerPrefetch& ahead);
 

@@ -386,6 +386,11 @@ class Engine {
                                               // particle pass's and the kick's cost
                                               // (Access::split_particles)
   std::vector<std::uint32_t> list_moved_;     // the reorder of the list build under way
+  // (r_i + r_j)^2 of each listed pair, m^2, in list order (Access::list_touch_distances): the
+  // pair touches while |x_i - x_j|^2 is below it. Radii do not change between builds, so the
+  // pair search reads it instead of summing and squaring the radii at every step. Padded with
+  // max_search_lanes zeros for the wide search's whole-vector loads.
+  std::vector<double> touch_dist2_;
 
   long step_ = 0;
   long rotation_start_ = -1;

@@ -16,6 +16,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
   const std::uint32_t* const start = e.list_.start().data();
   const std::uint32_t* const partner = e.list_.partner().data();
   double* const history = e.list_.history().data();
+  const double* const touch2 = e.touch_dist2_.data();
   static_assert(!in_lanes || hs == 3, "the lanes carry the spring d_t, 3 doubles");
   // 3. The springs back, and the sums: those on j straight into j, those on i into the
   // block's row sums, added to i last. As in the portable pass, to the bit: i receives from
@@ -59,8 +60,8 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       const TouchingPairs out{b.i.data(),  b.j.data(),  b.slot.data(),
                               b.dx.data(), b.dy.data(), b.dz.data()};
       b.size = lanes.touching_pairs[!EndWalls][prefetch](block, block_end, start, partner, x, y,
-                                                         z, r, n, period, b.slot_row.data(),
-                                                         out, ahead);
+                                                         z, touch2, n, period,
+                                                         b.slot_row.data(), out, ahead);
       for (std::size_t c = 0; c < b.size; ++c) {
         const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
         b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
@@ -87,7 +88,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
     while (block_end < own_end && b.size < ContactBatch::max_contacts &&
            block_end - block < ContactBatch::max_rows) {
       const std::size_t i = block_end;
-      const double xi = x[i], yi = y[i], zi = z[i], ri = r[i];
+      const double xi = x[i], yi = y[i], zi = z[i];
       b.reserve(start[i + 1] - start[i]);
       for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
         const std::size_t j = partner[s];
@@ -95,8 +96,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
         const double dx = xi - x[j], dy = yi - y[j];
         double dz = zi - z[j];
         if constexpr (!EndWalls) dz -= period * std::nearbyint(dz / period);
-        const double r_sum = ri + r[j];
-        if (!(dx * dx + dy * dy + dz * dz < r_sum * r_sum)) {
+        if (!(dx * dx + dy * dy + dz * dz < touch2[s])) {
           Law::clear(hist);
           continue;
         }
