@@ -23,13 +23,17 @@ HWY_BEFORE_NAMESPACE();
 namespace millscope::engine::HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-/// Whether this target packs the lanes a mask selects with one instruction (AVX-512's and
-/// SVE's compress). Elsewhere (AVX2, NEON) Highway 1.0's CompressStore permutes by a table
-/// that it copies onto the stack at every call (a local constexpr array), which cost more than
-/// the rest of the search on AVX2; there the search permutes by a table of its own, in
-/// read-only memory: PackTable.
+/// Whether Highway's Compress packs this target's lanes of `Bytes` bytes with one instruction,
+/// in a register (AVX-512's compress of 32-bit lanes; SVE's of any), stored as a whole vector
+/// after it. Not CompressStore: on AVX-512 that is the compress instruction's memory form, which
+/// AMD Zen 4 runs as microcode, far slower than the register form and a store. Elsewhere
+/// Highway 1.0's Compress permutes by a table that it copies onto the stack at every call (a
+/// local constexpr array: AVX2, NEON, and AVX-512's 64-bit lanes), which cost more than the rest
+/// of the search; there the search permutes by a table of its own, in read-only memory:
+/// PackTable.
+template <std::size_t Bytes>
 inline constexpr bool native_compress =
-    (HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3) ||
+    (Bytes == 4 && HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3) ||
     (HWY_TARGET & (HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128)) != 0;
 
 /// For N lanes and each mask `bits` of them: the lanes in the order that packs those set in
@@ -54,20 +58,26 @@ struct PackTable {
 template <std::size_t N>
 inline constexpr PackTable<N> pack_table{};
 
-/// Stores at `p` the lanes of v that `bits` (a mask of at most 8 lanes, StoreMaskBits) selects,
-/// packed in lane order; may write the whole vector. v has N lanes of 32 or 64 bits.
+/// Stores at `p` the lanes of v that `bits` (a mask, StoreMaskBits) selects, packed in lane
+/// order; may write the whole vector. v has lanes of 32 or 64 bits; without a native compress
+/// (native_compress), at most 8 of them.
 template <class D>
-HWY_INLINE void pack_store(D d, hn::Vec<D> v, std::uint8_t bits, hn::TFromD<D>* p) {
-  constexpr std::size_t N = hn::MaxLanes(D());
-  static_assert(N <= 8, "a mask of at most 8 lanes");
-  if constexpr (sizeof(hn::TFromD<D>) == 8) {
-    const hn::RebindToSigned<D> di;
-    const auto idx = hn::IndicesFromVec(d, hn::LoadU(di, pack_table<N>.lane64[bits]));
-    hn::StoreU(hn::TableLookupLanes(v, idx), d, p);
+HWY_INLINE void pack_store(D d, hn::Vec<D> v, const std::uint8_t* bits, hn::TFromD<D>* p) {
+  using T = hn::TFromD<D>;
+  if constexpr (native_compress<sizeof(T)>) {
+    hn::StoreU(hn::Compress(v, hn::LoadMaskBits(d, bits)), d, p);
   } else {
+    constexpr std::size_t N = hn::MaxLanes(D());
+    static_assert(N <= 8, "a mask of at most 8 lanes");
     const hn::RebindToSigned<D> di;
-    const auto idx = hn::IndicesFromVec(d, hn::LoadU(di, pack_table<N>.lane32[bits]));
-    hn::StoreU(hn::TableLookupLanes(v, idx), d, p);
+    const auto* const order = [&] {
+      if constexpr (sizeof(T) == 8) {
+        return pack_table<N>.lane64[bits[0]];
+      } else {
+        return pack_table<N>.lane32[bits[0]];
+      }
+    }();
+    hn::StoreU(hn::TableLookupLanes(v, hn::IndicesFromVec(d, hn::LoadU(di, order))), d, p);
   }
 }
 
@@ -164,21 +174,12 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
     std::uint8_t bits[(max_search_lanes + 7) / 8];
     hn::StoreMaskBits(d, touch, bits);
     const auto slots = hn::Add(hn::Set(du, s0 + s), lane);
-    if constexpr (native_compress) {
-      hn::CompressBitsStore(rows, bits, du, out.i + size);
-      hn::CompressBitsStore(j, bits, du, out.j + size);
-      hn::CompressBitsStore(slots, bits, du, out.slot + size);
-      hn::CompressStore(dx, touch, d, out.dx + size);
-      hn::CompressStore(dy, touch, d, out.dy + size);
-      hn::CompressStore(dz, touch, d, out.dz + size);
-    } else {
-      pack_store(du, rows, bits[0], out.i + size);
-      pack_store(du, j, bits[0], out.j + size);
-      pack_store(du, slots, bits[0], out.slot + size);
-      pack_store(d, dx, bits[0], out.dx + size);
-      pack_store(d, dy, bits[0], out.dy + size);
-      pack_store(d, dz, bits[0], out.dz + size);
-    }
+    pack_store(du, rows, bits, out.i + size);
+    pack_store(du, j, bits, out.j + size);
+    pack_store(du, slots, bits, out.slot + size);
+    pack_store(d, dx, bits, out.dx + size);
+    pack_store(d, dy, bits, out.dy + size);
+    pack_store(d, dz, bits, out.dz + size);
     size += hn::CountTrue(d, touch);
   }
   return size;
