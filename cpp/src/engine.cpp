@@ -278,8 +278,7 @@ double Engine::bytes_per_particle() const {
            bytes(order_) + bytes(lifter_reach_);
   for (const auto& b : buffers_) total += bytes(b);
   total += static_cast<double>(list_.bytes()) + bytes(list_moved_) + bytes(touch_dist2_) +
-           bytes(row_split_) +
-           bytes(particle_split_) + bytes(buffer_end_);
+           bytes(row_split_) + bytes(particle_split_) + bytes(buffer_end_);
   return total / static_cast<double>(n_);
 }
 
