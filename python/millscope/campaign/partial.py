@@ -10,7 +10,7 @@ time, two files there:
   case and how its settling went;
 * ``<hash>.checkpoint.npz``: the simulation's full state
   (:meth:`~millscope.simulation.Simulation.save`, compressed: a paper-scale LDMS #4 state is
-  about 3.6 MB instead of 7.3 MB, which keeps it small enough to carry a case from one machine
+  2-4 MB instead of about 7 MB, which keeps it small enough to carry a case from one machine
   to the next in git).
 
 The samples are written first and the checkpoint second, each atomically, so the checkpoint
