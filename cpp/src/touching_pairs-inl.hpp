@@ -58,14 +58,15 @@ struct PackTable {
 template <std::size_t N>
 inline constexpr PackTable<N> pack_table{};
 
-/// Stores at `p` the lanes of v that `bits` (a mask, StoreMaskBits) selects, packed in lane
-/// order; may write the whole vector. v has lanes of 32 or 64 bits; without a native compress
-/// (native_compress), at most 8 of them.
+/// Stores at `p` the lanes of v that mask m selects, packed in lane order; may write the whole
+/// vector. `bits` holds m as StoreMaskBits writes it (the table's row). v has lanes of 32 or
+/// 64 bits; without a native compress (native_compress), at most 8 of them.
 template <class D>
-HWY_INLINE void pack_store(D d, hn::Vec<D> v, const std::uint8_t* bits, hn::TFromD<D>* p) {
+HWY_INLINE void pack_store(D d, hn::Vec<D> v, hn::Mask<D> m, const std::uint8_t* bits,
+                           hn::TFromD<D>* p) {
   using T = hn::TFromD<D>;
   if constexpr (native_compress<sizeof(T)>) {
-    hn::StoreU(hn::Compress(v, hn::LoadMaskBits(d, bits)), d, p);
+    hn::StoreU(hn::Compress(v, m), d, p);
   } else {
     constexpr std::size_t N = hn::MaxLanes(D());
     static_assert(N <= 8, "a mask of at most 8 lanes");
@@ -174,12 +175,13 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
     std::uint8_t bits[(max_search_lanes + 7) / 8];
     hn::StoreMaskBits(d, touch, bits);
     const auto slots = hn::Add(hn::Set(du, s0 + s), lane);
-    pack_store(du, rows, bits, out.i + size);
-    pack_store(du, j, bits, out.j + size);
-    pack_store(du, slots, bits, out.slot + size);
-    pack_store(d, dx, bits, out.dx + size);
-    pack_store(d, dy, bits, out.dy + size);
-    pack_store(d, dz, bits, out.dz + size);
+    const auto touch_u = hn::LoadMaskBits(du, bits);  // the same mask, in the index lanes
+    pack_store(du, rows, touch_u, bits, out.i + size);
+    pack_store(du, j, touch_u, bits, out.j + size);
+    pack_store(du, slots, touch_u, bits, out.slot + size);
+    pack_store(d, dx, touch, bits, out.dx + size);
+    pack_store(d, dy, touch, bits, out.dy + size);
+    pack_store(d, dz, touch, bits, out.dz + size);
     size += hn::CountTrue(d, touch);
   }
   return size;
