@@ -28,13 +28,14 @@ from millscope.campaign.studies import (
     run_study,
     save_study_plan,
 )
-from millscope.model.presets import SCALE_BIAS, pilot_mill
+from millscope.model.presets import SCALE_BIAS, measured_bias, pilot_mill
 from millscope.report.reports import write_study
 from millscope.signal.record import TorqueRecord
 
 from .test_studies import SHORT, _fake_runs
 
 STUDY = Path(__file__).resolve().parents[1] / "data" / "study-paper-balls"
+LDMS_STUDY = STUDY.parent / "study-paper-ldms"
 
 
 # -- the plan file ------------------------------------------------------------------------------
@@ -266,25 +267,49 @@ def test_also_adds_a_setting_with_several_knobs_changed(tmp_path, capsys) -> Non
 # -- what the presets say each scale's bias is -------------------------------------------------
 
 
-@pytest.mark.parametrize("scale", sorted(SCALE_BIAS))
-def test_the_scale_bias_is_what_the_committed_study_measured(scale: str) -> None:
-    """presets.SCALE_BIAS quotes the study rounded: the study read again must round to it."""
-    bias = SCALE_BIAS[scale]
+_BIASES = [(scale, case) for scale, cases in SCALE_BIAS.items() for case in cases]
+# The committed study that measured each group of cases
+_STUDIES = {"balls-MS": STUDY, "LDMS": LDMS_STUDY}
+
+
+@pytest.mark.parametrize(("scale", "case"), _BIASES)
+def test_the_scale_bias_is_what_the_committed_study_measured(scale: str, case: str) -> None:
+    """presets.SCALE_BIAS quotes the studies rounded: the study read again must round to it."""
+    bias = SCALE_BIAS[scale][case]
+    group, _, level = case.partition("#")
     own = pilot_mill(0.71, scale=scale)
     paper = pilot_mill(0.71, scale="paper")
     factor = (own.material(own.drum.material).shear_modulus
               / paper.material(paper.drum.material).shear_modulus)
-    result = read_study(STUDY)
+    result = read_study(_STUDIES[group])
     (row,) = [r for r in result.rows  # the scale's drum and stiffness, the reference's rest
               if r.length_m == own.drum.length
               and (r.setting.scale == "paper") == (own.drum.length == paper.drum.length)
               and r.shear_modulus_ratio == pytest.approx(factor, rel=1e-12)
               and r.setting.dt_fraction == result.reference.dt_fraction
               and r.setting.record_s == result.reference.record_s
-              and r.setting.sampling == result.reference.sampling]
+              and r.setting.sampling == result.reference.sampling
+              and (not level or r.load_level == int(level))]
     q = row.quantities
-    assert row.seeds == bias.seeds
+    assert bias.case == case and row.seeds == bias.seeds
     assert bias.mean_torque == pytest.approx(q["mean_torque"].error, abs=5e-4)
     assert bias.mean_torque_se == pytest.approx(q["mean_torque"].error_se, abs=5e-4)
     assert bias.energy == pytest.approx(q["energy"].error, abs=5e-4)
     assert bias.energy_se == pytest.approx(q["energy"].error_se, abs=5e-4)
+    ratio = q["energy_ratio"]
+    if bias.per_unit_energy is None:  # the first level's per-unit energy is 1 by definition
+        assert level in ("", "1") or not math.isfinite(ratio.error)
+    else:
+        assert bias.per_unit_energy == pytest.approx(ratio.error, abs=5e-4)
+        assert bias.per_unit_energy_se == pytest.approx(ratio.error_se, abs=5e-4)
+
+
+def test_the_biases_quoted_for_a_group_are_its_cases_in_level_order() -> None:
+    """measured_bias picks a group's cases out of SCALE_BIAS, in load-level order, and names
+    a scale it does not know."""
+    ldms = measured_bias("tiny", "LDMS")
+    assert [b.case for b in ldms] == sorted(c for c in SCALE_BIAS["tiny"] if c.startswith("LDMS#"))
+    assert [b.case for b in measured_bias("tiny", "balls-MS")] == ["balls-MS"]
+    assert measured_bias("tiny", "HDMS") == () and measured_bias("small", "LDMS") == ()
+    with pytest.raises(ValueError, match="scale = 'huge' is not valid"):
+        measured_bias("huge", "LDMS")

@@ -51,8 +51,8 @@ from ..model.presets import (
     LIFTER_COUNT,
     LOAD_LEVELS,
     PARTICLE_KINDS,
-    SCALE_BIAS,
     SCALES,
+    measured_bias,
     paper_cases,
     pilot_mill,
 )
@@ -255,8 +255,9 @@ def run_demo(out: str | os.PathLike[str], plan: DemoPlan | None = None, *,
         print(f"millscope demo: DEM campaign {names} at scale {plan.scale!r}, "
               f"{plan.duration_s:g} s of rotation each (the first {plan.warm_up_s:g} s not "
               f"kept), on {where}; store {campaign.store}")
+        group = campaign.cases[0].scene.name.rsplit("#", 1)[0]
         print(f"millscope demo: measured bias of scale {plan.scale!r}: "
-              f"{_scale_bias_text(plan.scale)}")
+              f"{_scale_bias_text(plan.scale, group)}")
     start = time.perf_counter()
     results = campaign.run(executor=executor, max_workers=max_workers, progress=progress)
     wall = time.perf_counter() - start
@@ -398,16 +399,17 @@ def _leave_one_out(rows: Sequence[_Row], levels: np.ndarray, energies: np.ndarra
     return out
 
 
-def _scale_bias_text(scale: str) -> str:
-    """What the paper-scale study measured for ``scale`` (presets.SCALE_BIAS), or that it was
-    not measured."""
+def _scale_bias_text(scale: str, group: str) -> str:
+    """What the paper-scale studies measured for ``scale`` and the cases of ``group``
+    (presets.SCALE_BIAS), or that they were not measured."""
     if scale == "paper":
         return "none: this is the paper's scale and stiffness"
-    bias = SCALE_BIAS.get(scale)
-    if bias is None:
-        return "not measured by the paper-scale study (data/study-paper-balls)"
-    return (f"{bias.describe()}; read this scale's energies as trends, not as the paper's "
-            "values")
+    biases = measured_bias(scale, group)
+    if not biases:
+        return (f"not measured by the paper-scale studies for {group} (data/study-paper-balls, "
+                "data/study-paper-ldms)")
+    return (f"{'; '.join(b.describe() for b in biases)}; read this scale's energies as trends, "
+            "not as the paper's values")
 
 
 def _section_markdown(plan: DemoPlan, rows: Sequence[_Row], energies_pu: np.ndarray,
@@ -429,7 +431,7 @@ def _section_markdown(plan: DemoPlan, rows: Sequence[_Row], energies_pu: np.ndar
         "(not synthetic data), analysed as in the paper's section 6.",
         "",
         f"- scale `{plan.scale}`: {SCALES[plan.scale]}",
-        f"- measured bias of this scale: {_scale_bias_text(plan.scale)}",
+        f"- measured bias of this scale: {_scale_bias_text(plan.scale, group)}",
         f"- particles: {plan.particles}; speed {100 * plan.speed_fraction:g} % of critical "
         f"(rotation {rotation_hz:.4f} Hz, {lifters} lifters, LTH expected at "
         f"{lifters * rotation_hz:.3f} Hz)",

@@ -47,6 +47,7 @@ __all__ = [
     "axial_slice",
     "case_key",
     "case_name",
+    "measured_bias",
     "paper_cases",
     "pilot_mill",
 ]
@@ -146,9 +147,10 @@ SCALES: Mapping[str, str] = MappingProxyType(
 
 @dataclass(frozen=True)
 class ScaleBias:
-    """What the paper-scale study measured for a scale: the relative error of the seed mean
-    against the paper's stiffness on the whole drum (dt 0.2 Rayleigh times, 4 s warm-up, a
-    10 s block of instantaneous 10 ms samples), with its standard error from the seeds.
+    """What a paper-scale study measured for a scale and a case: the relative error of the
+    seed mean against the paper's stiffness on the whole drum (dt 0.2 Rayleigh times, 4 s
+    warm-up, a 10 s block of instantaneous 10 ms samples), with its standard error from the
+    seeds.
 
     Torques are compared per length of drum and energies per length of drum and of block
     (:mod:`millscope.campaign.studies`); fractions, e.g. -0.85 for 85 % less.
@@ -156,7 +158,7 @@ class ScaleBias:
     Attributes
     ----------
     case : str
-        The case measured, e.g. ``"balls-MS"`` (71 % of critical speed).
+        The case measured, e.g. ``"balls-MS"`` or ``"LDMS#4"`` (71 % of critical speed).
     seeds : int
         Seeds behind each mean.
     mean_torque, mean_torque_se : float
@@ -164,6 +166,10 @@ class ScaleBias:
     energy, energy_se : float
         Spectral energy with the mean and the LTH removed (eq. 11): error and its standard
         error.
+    per_unit_energy, per_unit_energy_se : float or None
+        For a level of a ladder (e.g. LDMS#4 of the study of LDMS #1 and #4): error of the
+        per-unit energy, the level's energy over the first level's (the quantity the fill
+        estimate reads), and its standard error; None where not measured.
     """
 
     case: str
@@ -172,26 +178,60 @@ class ScaleBias:
     mean_torque_se: float
     energy: float
     energy_se: float
+    per_unit_energy: float | None = None
+    per_unit_energy_se: float | None = None
 
     def describe(self) -> str:
         """One sentence, e.g. for a report."""
+        per_unit = "" if self.per_unit_energy is None else (
+            f", per-unit energy {100 * self.per_unit_energy:+.0f} % ± "
+            f"{100 * (self.per_unit_energy_se or 0.0):.0f} %")
         return (f"the paper-scale study measured, for {self.case} with {self.seeds} seeds, "
                 f"mean torque {100 * self.mean_torque:+.1f} % ± {100 * self.mean_torque_se:.1f} "
                 f"% and spectral energy {100 * self.energy:+.0f} % ± "
-                f"{100 * self.energy_se:.0f} % against the paper's stiffness on the whole drum "
-                "(per unit of drum length)")
+                f"{100 * self.energy_se:.0f} %{per_unit} against the paper's stiffness on the "
+                "whole drum (per unit of drum length)")
 
 
-#: The bias of each scale that the paper-scale study measured (the committed study
-#: data/study-paper-balls; ``millscope report data/study-paper-balls`` remakes its tables, and
-#: a test checks these figures against it). A scale not listed was not measured. The energy
+#: The bias of each scale, per case, that the paper-scale studies measured (the committed
+#: studies data/study-paper-balls for balls-MS and data/study-paper-ldms for LDMS #1 and #4;
+#: ``millscope report <study>`` remakes their tables, and a test checks these figures against
+#: them). ``SCALE_BIAS[scale][case]``; a scale or case not listed was not measured. The energy
 #: bias comes from the softened contacts (the slice at the paper's stiffness reads the whole
-#: drum's energy within its noise); per-unit energies, which the fill estimate reads, are not
-#: measured yet.
-SCALE_BIAS: Mapping[str, ScaleBias] = MappingProxyType({
-    "tiny": ScaleBias("balls-MS", 3, -0.060, 0.015, -0.851, 0.096),
-    "soft": ScaleBias("balls-MS", 3, -0.036, 0.006, -0.879, 0.096),
+#: drum's energy within its noise, balls-MS).
+SCALE_BIAS: Mapping[str, Mapping[str, ScaleBias]] = MappingProxyType({
+    "tiny": MappingProxyType({
+        "balls-MS": ScaleBias("balls-MS", 3, -0.060, 0.015, -0.851, 0.096),
+        "LDMS#1": ScaleBias("LDMS#1", 3, -0.073, 0.007, -0.888, 0.040),
+    }),
+    "soft": MappingProxyType({
+        "balls-MS": ScaleBias("balls-MS", 3, -0.036, 0.006, -0.879, 0.096),
+        "LDMS#1": ScaleBias("LDMS#1", 3, -0.040, 0.006, -0.879, 0.039),
+    }),
 })
+
+
+def measured_bias(scale: str, group: str) -> tuple[ScaleBias, ...]:
+    """The biases :data:`SCALE_BIAS` holds for ``scale`` and the cases of ``group``.
+
+    Parameters
+    ----------
+    scale : str
+        One of :data:`SCALES`.
+    group : str
+        A case's name without its load level, e.g. ``"LDMS"`` or ``"balls-MS"``.
+
+    Returns
+    -------
+    tuple of ScaleBias
+        In load-level order; empty where the studies did not measure the scale or the group.
+    """
+    if scale not in SCALES:
+        raise ValueError(f"scale = {scale!r} is not valid; it must be one of "
+                         f"{', '.join(repr(s) for s in SCALES)}")
+    found = SCALE_BIAS.get(scale, {})
+    return tuple(found[c] for c in sorted(found)
+                 if c == group or c.partition("#")[0] == group)
 
 
 def _speed(value: object, where: str) -> float:
