@@ -6,6 +6,7 @@ form, that the figure fits the run's own wall time, and that bad input is refuse
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -43,6 +44,19 @@ def test_the_figure_is_positive_and_fits_the_run_s_wall_time(program: Path) -> N
     # The median round's mean hand-off: at least half of the rounds took as long, and all ran
     # within the process's wall time.
     assert ns * handoffs * (rounds // 2 + 1) <= wall_ns
+
+
+def test_two_threads_on_one_core_hand_off_by_yielding(program: Path) -> None:
+    """Both threads pinned to one core (a one-core machine, or a busy one where they land on
+    the same core): each must give the core to the other, or every hand-off costs a whole
+    time slice and 20000 of them take minutes. The figure then counts the switches."""
+    core = min(os.sched_getaffinity(0))
+    handoffs, rounds = 20000, 3
+    out = subprocess.run([str(program), str(handoffs), str(rounds)], capture_output=True,
+                         text=True, timeout=60,
+                         preexec_fn=lambda: os.sched_setaffinity(0, {core}))
+    assert out.returncode == 0, out.stderr
+    assert re.fullmatch(r"core_handoff_ns=(\d+\.\d)\n", out.stdout), out.stdout
 
 
 @pytest.mark.parametrize(("args", "name", "value"), [

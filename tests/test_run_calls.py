@@ -74,6 +74,9 @@ def test_ctrl_c_stops_a_run_between_calls() -> None:
     """SIGINT during a run of 1000 s: the run returns early with what it sampled."""
     sim = small_sim()
     sim.settle(progress=False)
+    # Python's own Ctrl-C handler, as in a terminal, whatever the test runner inherited (a job
+    # started in the background of a shell ignores SIGINT, and so does Python then)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.3, signal.raise_signal, (signal.SIGINT,))
     timer.start()
     try:
@@ -81,6 +84,7 @@ def test_ctrl_c_stops_a_run_between_calls() -> None:
             rec = sim.run(1000.0, progress=False)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert rec.meta["interrupted"] is True
     assert len(rec) < 100_000
 
