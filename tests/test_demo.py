@@ -95,9 +95,10 @@ def test_demo_report_agrees_with_the_stored_records(demo: tuple[Path, DemoResult
     assert ("does NOT fall monotonically" in text) == (not falls)
     assert "tiny" in text and "Leave-one-out" in text
     # the bias the paper-scale study measured for the scale it runs
-    quoted = "; ".join(b.describe() for b in ms.presets.SCALE_BIAS["tiny"].values()
-                       if b.case.startswith("LDMS#"))
-    assert quoted and f"measured bias of this scale: {quoted}" in text
+    quoted = [f"{b.case} ({b.seeds} seeds): {b.figures()}"
+              for b in ms.presets.SCALE_BIAS["tiny"].values() if b.case.startswith("LDMS#")]
+    assert quoted and "- measured bias of this scale: the paper-scale study measured" in text
+    assert all(q in text for q in quoted)
     for name in ("torque_level1.png", "fig12_waterfall_LDMS.png", "fig15_fits.png"):
         assert f"]({name})" in text, name
 

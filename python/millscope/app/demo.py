@@ -408,8 +408,14 @@ def _scale_bias_text(scale: str, group: str) -> str:
     if not biases:
         return (f"not measured by the paper-scale studies for {group} (data/study-paper-balls, "
                 "data/study-paper-ldms)")
-    return (f"{'; '.join(b.describe() for b in biases)}; read this scale's energies as trends, "
-            "not as the paper's values")
+    if len(biases) == 1:
+        measured = biases[0].describe()
+    else:
+        measured = ("the paper-scale study measured these errors (± standard error) against the "
+                    "paper's stiffness on the whole drum, per unit of drum length: "
+                    + "; ".join(f"{b.case} ({b.seeds} seeds): {b.figures()}"
+                                for b in biases))
+    return f"{measured}; read this scale's energies as trends, not as the paper's values"
 
 
 def _section_markdown(plan: DemoPlan, rows: Sequence[_Row], energies_pu: np.ndarray,
