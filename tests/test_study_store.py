@@ -28,7 +28,7 @@ from millscope.campaign.studies import (
     run_study,
     save_study_plan,
 )
-from millscope.model.presets import SCALE_BIAS, measured_bias, pilot_mill
+from millscope.model.presets import SCALE_BIAS, ScaleBias, measured_bias, pilot_mill
 from millscope.report.reports import write_study
 from millscope.signal.record import TorqueRecord
 
@@ -313,3 +313,5 @@ def test_the_biases_quoted_for_a_group_are_its_cases_in_level_order() -> None:
     assert measured_bias("tiny", "HDMS") == () and measured_bias("small", "LDMS") == ()
     with pytest.raises(ValueError, match="scale = 'huge' is not valid"):
         measured_bias("huge", "LDMS")
+    with pytest.raises(ValueError, match="per_unit_energy and per_unit_energy_se"):
+        ScaleBias("LDMS#4", 3, -0.1, 0.01, -0.9, 0.08, per_unit_energy=-0.2)

@@ -255,7 +255,7 @@ def run_demo(out: str | os.PathLike[str], plan: DemoPlan | None = None, *,
         print(f"millscope demo: DEM campaign {names} at scale {plan.scale!r}, "
               f"{plan.duration_s:g} s of rotation each (the first {plan.warm_up_s:g} s not "
               f"kept), on {where}; store {campaign.store}")
-        group = campaign.cases[0].scene.name.rsplit("#", 1)[0]
+        group = _group_of(campaign.cases[0].scene.name)
         print(f"millscope demo: measured bias of scale {plan.scale!r}: "
               f"{_scale_bias_text(plan.scale, group)}")
     start = time.perf_counter()
@@ -283,9 +283,14 @@ def _level(result: CaseResult) -> int:
 
 
 def _group(result: CaseResult) -> str:
-    """The group (material x speed) of a case, from its name (``"LDMS#3"`` -> ``"LDMS"``), as
+    """The group (material x speed) of a case, as
     :func:`~millscope.campaign_analysis.analyze_campaign` names it."""
-    return result.scene.name.rsplit("#", 1)[0]
+    return _group_of(result.scene.name)
+
+
+def _group_of(name: str) -> str:
+    """The group of a case's name: ``"LDMS#3"`` -> ``"LDMS"``."""
+    return name.rsplit("#", 1)[0]
 
 
 @dataclass(frozen=True)

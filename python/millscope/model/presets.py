@@ -181,12 +181,18 @@ class ScaleBias:
     per_unit_energy: float | None = None
     per_unit_energy_se: float | None = None
 
+    def __post_init__(self) -> None:
+        if (self.per_unit_energy is None) != (self.per_unit_energy_se is None):
+            raise ValueError("ScaleBias.per_unit_energy and per_unit_energy_se must be given "
+                             "together or not at all")
+
     def figures(self) -> str:
         """The errors ± their standard errors, e.g. ``"mean torque -7.3 % ± 0.7 %, spectral
         energy -89 % ± 4 %"``."""
-        per_unit = "" if self.per_unit_energy is None else (
-            f", per-unit energy {100 * self.per_unit_energy:+.0f} % ± "
-            f"{100 * (self.per_unit_energy_se or 0.0):.0f} %")
+        per_unit = ""
+        if self.per_unit_energy is not None and self.per_unit_energy_se is not None:
+            per_unit = (f", per-unit energy {100 * self.per_unit_energy:+.0f} % ± "
+                        f"{100 * self.per_unit_energy_se:.0f} %")
         return (f"mean torque {100 * self.mean_torque:+.1f} % ± {100 * self.mean_torque_se:.1f} "
                 f"%, spectral energy {100 * self.energy:+.0f} % ± {100 * self.energy_se:.0f} %"
                 f"{per_unit}")
@@ -237,8 +243,7 @@ def measured_bias(scale: str, group: str) -> tuple[ScaleBias, ...]:
         raise ValueError(f"scale = {scale!r} is not valid; it must be one of "
                          f"{', '.join(repr(s) for s in SCALES)}")
     found = SCALE_BIAS.get(scale, {})
-    return tuple(found[c] for c in sorted(found)
-                 if c == group or c.partition("#")[0] == group)
+    return tuple(found[c] for c in sorted(found) if c.partition("#")[0] == group)
 
 
 def _speed(value: object, where: str) -> float:
