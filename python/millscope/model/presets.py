@@ -239,10 +239,7 @@ def measured_bias(scale: str, group: str) -> tuple[ScaleBias, ...]:
     tuple of ScaleBias
         In load-level order; empty where the studies did not measure the scale or the group.
     """
-    if scale not in SCALES:
-        raise ValueError(f"scale = {scale!r} is not valid; it must be one of "
-                         f"{', '.join(repr(s) for s in SCALES)}")
-    found = SCALE_BIAS.get(scale, {})
+    found = SCALE_BIAS.get(_scale(scale, "scale"), {})
     return tuple(found[c] for c in sorted(found) if c.partition("#")[0] == group)
 
 
@@ -265,6 +262,15 @@ def _particles(value: object, where: str) -> str | None:
         raise ValueError(
             f"{where} = {value!r} is not valid; it must be one of "
             f"{', '.join(repr(k) for k in PARTICLE_KINDS)} or None (balls only)"
+        )
+    return value
+
+
+def _scale(value: object, where: str) -> str:
+    if not isinstance(value, str) or value not in _SCALES:
+        raise ValueError(
+            f"{where} = {value!r} is not valid; it must be one of "
+            f"{', '.join(repr(k) for k in _SCALES)}"
         )
     return value
 
@@ -417,11 +423,7 @@ def pilot_mill(
     -------
     Scene
     """
-    if not isinstance(scale, str) or scale not in _SCALES:
-        raise ValueError(
-            f"scale = {scale!r} is not valid; it must be one of "
-            f"{', '.join(repr(k) for k in _SCALES)}"
-        )
+    scale = _scale(scale, "scale")
     kind = _particles(particles, "particles")
     level = _level(load_level, "load_level")
     if kind is None and level != 1:
@@ -460,11 +462,7 @@ def axial_slice(n_particles: int, scale: str = "paper", speed_fraction: float = 
     Scene
         Named ``"balls-MS slice N"`` (the case code, then the ball count).
     """
-    if not isinstance(scale, str) or scale not in _SCALES:
-        raise ValueError(
-            f"scale = {scale!r} is not valid; it must be one of "
-            f"{', '.join(repr(k) for k in _SCALES)}"
-        )
+    scale = _scale(scale, "scale")
     if (
         not isinstance(n_particles, Integral)
         or isinstance(n_particles, bool)
