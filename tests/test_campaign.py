@@ -553,3 +553,50 @@ def test_from_store_refuses_what_is_not_a_store(tmp_path: Path) -> None:
         ms.Campaign.from_store(tmp_path / "none")
     with pytest.raises(ValueError, match="holds no case file"):
         ms.Campaign.from_store(tmp_path)
+
+
+# -- cases shared with another store ------------------------------------------------------
+
+
+def test_adopt_copies_the_finished_cases_another_store_holds(tmp_path: Path) -> None:
+    """A campaign sharing cases with an earlier one copies their files (the same bytes, so the
+    same results) and runs only the rest; a damaged or failed case there is not taken.
+    Synthetic records stand in for the runs (tests/synthetic_campaign.py)."""
+    from .synthetic_campaign import SyntheticExecutor, synthetic_store
+
+    scenes = ms.presets.paper_cases("ceramic", 0.71, [1, 2, 3, 4], scale="tiny")
+    earlier = tmp_path / "earlier"
+    first = synthetic_store(earlier, scenes[:3], fail=["LDMS#3"])
+    assert [r.status for r in first] == ["done", "done", "failed"]
+    damaged = earlier / "cases" / f"{first[1].hash}.npz"
+    damaged.write_bytes(damaged.read_bytes()[:-100])  # cut short: not a case any more
+
+    other = tmp_path / "other"  # a store without these cases: the search goes on
+    other.mkdir()
+    camp = ms.Campaign(scenes, tmp_path / "store", duration=14.0, block=(4.0, 14.0))
+    assert camp.adopt([other, earlier]) == (first[0].hash,)
+    copied = camp.case_file(0)
+    assert copied.read_bytes() == (earlier / "cases" / copied.name).read_bytes()
+    assert [r.status for r in camp.results()] == ["done", "pending", "pending", "pending"]
+    assert_manifest_matches_files(tmp_path / "store", camp)
+    assert temporaries(tmp_path / "store") == []
+
+    executor = SyntheticExecutor()
+    results = camp.run(executor=executor, progress=False)
+    assert executor.submitted == 3  # the copied case does not run again
+    assert results[0].energy == first[0].energy
+    assert camp.adopt([earlier]) == ()  # nothing left to take
+
+
+def test_adopt_refuses_what_is_not_another_store(tmp_path: Path) -> None:
+    camp = campaign(tmp_path / "store")
+    with pytest.raises(ValueError, match=r"stores\[0\] = '.*nowhere' is not valid; it must "
+                                         r"be an existing campaign store directory"):
+        camp.adopt([tmp_path / "nowhere"])
+    with pytest.raises(ValueError, match=r"stores = '.*' is not valid; it must be an iterable"):
+        camp.adopt(str(tmp_path))  # a path is a str, which iterates over characters
+    (tmp_path / "store").mkdir()
+    with pytest.raises(ValueError, match=r"stores\[1\] = .* another store than this "
+                                         r"campaign's own"):
+        camp.adopt([tmp_path, tmp_path / "store" / "."])
+    assert list((tmp_path / "store").iterdir()) == []  # refused before anything is written

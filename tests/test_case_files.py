@@ -172,6 +172,25 @@ def test_a_campaign_file_listing_both_sampling_modes_stores_each_case_in_both(
     assert infos[0]["wall_time_s"] == infos[1]["wall_time_s"]  # one run made the pair
 
 
+def test_a_campaign_file_reuses_the_finished_cases_of_another_store(
+        tmp_path, monkeypatch, capsys) -> None:
+    """``reuse``: the cases another store finished are copied, the rest run; the copies are
+    the other store's files, byte for byte."""
+    monkeypatch.chdir(tmp_path)
+    earlier = write(tmp_path, edit(CAMPAIGN, 'store = "store"', 'store = "earlier"'), "a.toml")
+    assert main(["campaign", str(earlier), "--no-progress"]) == 0
+    spec = write(tmp_path, edit(CAMPAIGN, "seeds = [0, 1]",
+                                'seeds = [0, 1, 2]\nreuse = ["earlier"]'), "b.toml")
+    capsys.readouterr()
+    assert main(["campaign", str(spec), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "2 finished case(s) copied from earlier" in out and "3 cases, 2 already done" in out
+    before = sorted((tmp_path / "earlier" / "cases").glob("*.npz"))
+    for path in before:
+        assert (tmp_path / "store" / "cases" / path.name).read_bytes() == path.read_bytes()
+    assert len(list((tmp_path / "store" / "cases").glob("*.npz"))) == 3
+
+
 @pytest.mark.parametrize("value", ['[]', '["mean", "mean"]', '["instant", "sum"]', '3'])
 def test_a_bad_list_of_sampling_modes_is_refused(tmp_path, value) -> None:
     spec = write(tmp_path, CAMPAIGN.replace('sampling = "mean"', f"sampling = {value}"),
@@ -282,7 +301,13 @@ def test_bad_campaign_files_are_one_line(tmp_path, monkeypatch, capsys) -> None:
     cases = [
         (edit(CAMPAIGN, "seeds = [0, 1]", "seed = [0, 1]"),
          "[campaign]: unknown key 'seed'; the keys are store, block, seeds, bandwidth, window, "
-         "retry_failed"),
+         "retry_failed, reuse"),
+        (edit(CAMPAIGN, "seeds = [0, 1]", 'seeds = [0, 1]\nreuse = "earlier"'),
+         "[campaign] reuse = 'earlier' is not valid; it must be a list of campaign store "
+         'directories, e.g. ["data/study-paper-ldms/store"]'),
+        (edit(CAMPAIGN, "seeds = [0, 1]", 'seeds = [0, 1]\nreuse = ["nowhere"]'),
+         "[campaign] reuse: 'nowhere' is not valid; it must be an existing campaign store "
+         "directory (relative paths are relative to the working directory)"),
         (edit(CAMPAIGN, "seeds = [0, 1]", "seeds = [0, 0]"),
          "[campaign] seeds = [0, 0] is not valid; it must be free of repeats"),
         (edit(CAMPAIGN, "block = [0.1, 0.5]", "block = [0.1, 0.9]"),

@@ -28,7 +28,9 @@ A case file is TOML with three tables::
     spectrum = "out/case.png"    # optional: the spectrum figure of the kept record
 
 A campaign file has ``[campaign]`` (``store``, and optionally ``block``, ``seeds``,
-``bandwidth``, ``window``, ``retry_failed`` as :class:`~millscope.Campaign` takes them),
+``bandwidth``, ``window``, ``retry_failed`` as :class:`~millscope.Campaign` takes them, and
+``reuse``: other stores whose finished cases of this campaign are copied in instead of run,
+:meth:`~millscope.Campaign.adopt`),
 the scenes as ``[matrix]`` (the arguments of :func:`millscope.presets.paper_cases`) and/or
 ``[[scenes]]`` (each one as ``[scene]`` above), ``[settings]`` as above (without
 ``energy_ledger``; ``sampling`` may list both modes, ``["instant", "mean"]``: every case is
@@ -389,10 +391,11 @@ class CampaignPlan:
     campaign: Campaign
     max_workers: Any  # as read; Campaign.run checks it
     retry_failed: bool
+    reuse: tuple[str, ...]  # other stores whose finished cases are copied in (Campaign.adopt)
     executor_table: str  # "<file>: [executor]", for the messages of Campaign.run's checks
 
 
-_CAMPAIGN_KEYS = ("store", "block", "seeds", "bandwidth", "window", "retry_failed")
+_CAMPAIGN_KEYS = ("store", "block", "seeds", "bandwidth", "window", "retry_failed", "reuse")
 
 
 def load_campaign(path: str | os.PathLike[str]) -> CampaignPlan:
@@ -430,12 +433,28 @@ def load_campaign(path: str | os.PathLike[str]) -> CampaignPlan:
     with _api(where):
         _checks.text("store", store)
         retry = _checks.flag("retry_failed", top.get("retry_failed", True))
+        reuse = _store_list(top.get("reuse", []), where)
         campaign = Campaign(cases, store, **options)
 
     executor = _table(data, "executor", str(path), ("kind", "max_workers"))
     with _api(f"{path}: [executor]"):
         _checks.choice("kind", executor.get("kind", "local"), _EXECUTORS)
-    return CampaignPlan(campaign, executor.get("max_workers"), retry, f"{path}: [executor]")
+    return CampaignPlan(campaign, executor.get("max_workers"), retry, reuse,
+                        f"{path}: [executor]")
+
+
+def _store_list(value: object, where: str) -> tuple[str, ...]:
+    """``reuse``: a list of existing store directories."""
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise CaseFileError(f"{where} reuse = {_checks.show(value)} is not valid; it must be "
+                            "a list of campaign store directories, e.g. "
+                            "[\"data/study-paper-ldms/store\"]")
+    for v in value:
+        if not Path(v).is_dir():
+            raise CaseFileError(f"{where} reuse: {v!r} is not valid; it must be an existing "
+                                "campaign store directory (relative paths are relative to the "
+                                "working directory)")
+    return tuple(value)
 
 
 def run_campaign(plan: CampaignPlan, *, progress: bool = True) -> int:
@@ -451,6 +470,10 @@ def run_campaign(plan: CampaignPlan, *, progress: bool = True) -> int:
         on Ctrl-C, as :meth:`Campaign.run`.
     """
     camp = plan.campaign
+    if plan.reuse:
+        adopted = camp.adopt(plan.reuse)
+        print(f"millscope campaign: {len(adopted)} finished case(s) copied from "
+              f"{', '.join(plan.reuse)}", flush=True)
     before = sum(1 for r in camp.results() if r.ok)
     print(f"millscope campaign: {len(camp)} cases, {before} already done in {camp.store}",
           flush=True)

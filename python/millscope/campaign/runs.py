@@ -25,7 +25,9 @@ called :meth:`Campaign.run` writes: workers return their record, so a dask clust
 shared file system. The files are the truth; the manifest is rebuilt from them at every start,
 so a campaign killed at any point resumes where it stopped and keeps every case whose file was
 written, and a long case killed half-way goes on from its last in-case checkpoint; a case file
-that cannot be read (:func:`unreadable_cases` says why) is computed again.
+that cannot be read (:func:`unreadable_cases` says why) is computed again. Cases another store
+already finished (an earlier campaign or study sharing them) are copied in by
+:meth:`Campaign.adopt` instead of being run again.
 The local pool's workers do not run the caller's main module (no ``__main__`` guard needed)
 and end when the campaign process ends, even when it is killed. A rerun skips finished cases
 and retries failed ones; a case that raises is recorded as failed and the others go on. Ctrl-C
@@ -48,12 +50,13 @@ import contextlib
 import json
 import math
 import os
+import shutil
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import _checks, _core
-from .._files import atomic_write
+from .._files import atomic_path, atomic_write
 from .._frames import frame
 from ..engine.simulation import _available_cores, other_sampling
 from ..model.scene import Scene
@@ -303,6 +306,70 @@ class Campaign:
         return _case_path(self._store, self._hashes[case])
 
     # -- running -------------------------------------------------------------------------------
+    def adopt(self, stores: Iterable[str | os.PathLike[str]]) -> tuple[str, ...]:
+        """Copies into this campaign's store the finished cases of other stores that it lacks.
+
+        A case is the same case wherever it ran (:meth:`Case.hash` names its scene and
+        settings, and the engine is deterministic), so a campaign that shares cases with an
+        earlier campaign or study need not run them again: e.g. the paper's campaign at the
+        reference setting of an accuracy study. Each of this campaign's cases that is not
+        finished in its own store is looked up in ``stores``, in order; the first whole,
+        consistent file found (read as untrusted input, as :func:`unreadable_cases` checks
+        it) is copied in, atomically. Failures and in-case checkpoints are not copied.
+
+        Parameters
+        ----------
+        stores : iterable of str or path
+            Other campaign store directories (a study's is ``<folder>/store``).
+
+        Returns
+        -------
+        tuple of str
+            The hashes of the cases copied, in the campaign's order.
+
+        Raises
+        ------
+        ValueError
+            when a store is not a directory or is this campaign's own store, before anything
+            is copied.
+        RuntimeError
+            when another campaign holds this store.
+        """
+        if isinstance(stores, (str, bytes, os.PathLike)) or not isinstance(stores, Iterable):
+            raise _checks.fail("stores", stores, "an iterable of campaign store directories")
+        sources = [Path(s) for s in stores]
+        for k, src in enumerate(sources):
+            if not src.is_dir():
+                raise _checks.fail(f"stores[{k}]", str(src),
+                                   "an existing campaign store directory")
+            if self._store.is_dir() and src.resolve() == self._store.resolve():
+                raise _checks.fail(f"stores[{k}]", str(src),
+                                   f"another store than this campaign's own ({self._store})")
+        self._store.mkdir(parents=True, exist_ok=True)
+        (self._store / "cases").mkdir(exist_ok=True)
+        copied: list[str] = []
+        with _locked(self._store):
+            _remove_temporaries(self._store)
+            finished = {d for d, (status, _, _) in _stored(self._store).items()
+                        if status == "done"}
+            for digest in self._hashes:
+                if digest in finished:
+                    continue
+                for src in sources:
+                    path = _case_path(src, digest)
+                    try:
+                        _open_done(path)
+                    except (_Unreadable, OSError):
+                        continue  # missing or damaged there: try the next store
+                    with atomic_path(_case_path(self._store, digest)) as tmp:
+                        shutil.copyfile(path, tmp)
+                    PartialFiles(self._store / PARTIAL_DIR, digest).remove()
+                    copied.append(digest)
+                    break
+            if copied:
+                _write_manifest(self._store, self._entries(_scan(self._store)), self._analysis)
+        return tuple(copied)
+
     def run(self, executor: Any = None, *, max_workers: int | None = None,
             progress: bool = True, retry_failed: bool = True,
             checkpoint_every_s: float | None = CHECKPOINT_EVERY_S) -> CaseResults:
