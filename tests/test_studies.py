@@ -274,6 +274,48 @@ def test_cheapest_within_a_bound_counts_two_standard_errors() -> None:
     assert table.cheapest("energy", 0.05) == table.settings[0]  # 0.03 + 2 x 0.05 > 0.05
     assert table.cheapest("energy", 0.14) == table.settings[1]
     assert _table([(1.0, 0.5), (2.0, 0.6)]).cheapest("energy", 0.01, with_se=False) is None
+    # a second bound that every level must keep too: the torque of _table errs as much
+    assert table.cheapest("energy", 0.05, with_se=False,
+                          also={"mean_torque": 0.04}) == table.settings[1]
+    with pytest.raises(ValueError, match=r"also = 'torque' is not valid; it must be one of"):
+        table.cheapest("energy", 0.05, also={"torque": 0.02})
+
+
+def test_seeds_to_show_an_error_within_a_bound() -> None:
+    """The standard error falls as 1 / sqrt(seeds): n' = n (2 SE / (bound - |error|))^2."""
+    table = _table([(100.0, 0.0), (10.0, 0.03), (5.0, 0.045), (1.0, 0.2)])
+    assert table.seeds_to_show(table.settings[1], "energy", 0.05) == pytest.approx(
+        2 * (2 * 0.05 / 0.02) ** 2)
+    assert table.seeds_to_show(table.settings[3], "energy", 0.05) == math.inf
+    assert table.seeds_to_show(table.settings[0], "energy", 0.05) == 2  # the reference's own
+
+
+def _changed(table: StudyResult, quantity: str, **changes: float) -> StudyResult:
+    """``table`` with ``changes`` made to ``quantity`` in every row but the reference's."""
+    return StudyResult(tuple(
+        r if r.reference else dataclasses.replace(r, quantities={
+            **r.quantities, quantity: dataclasses.replace(r.quantities[quantity], **changes)})
+        for r in table.rows))
+
+
+def test_the_report_names_the_recommended_setting_or_says_none_qualifies() -> None:
+    # the torque well within 2 %, the energy errs by 0, 3, 4.5 and 20 % (± 5 %)
+    table = _changed(_table([(100.0, 0.0), (10.0, 0.03), (5.0, 0.045), (1.0, 0.2)]),
+                     "mean_torque", error=0.0, error_se=0.001)
+    s = table.settings
+    assert (f"**none of the cheaper settings qualifies**. By their errors alone, without the "
+            f"noise, {s[2].label} and {s[1].label} keep the bounds; showing it for "
+            f"{s[2].label} would take about {2 * (2 * 0.05 / 0.005) ** 2:.0f} seeds of it and "
+            "of the reference.") in table.to_markdown()
+    sure = _changed(_table([(100.0, 0.0), (10.0, 0.001)]), "mean_torque", error=0.0,
+                    error_se=0.001)
+    assert f"noise, {sure.settings[1].label} keeps the bounds" in sure.to_markdown()
+    sure = _changed(sure, "energy", error_se=0.001)  # now 0.001 + 2 x 0.001 <= 0.05
+    assert f"reference's at every level, each error with 2 standard errors): " \
+           f"**{sure.settings[1].label}**." in sure.to_markdown()
+    # a torque off by 3 %: nothing keeps the bounds
+    off = _changed(table, "mean_torque", error=0.03)
+    assert "None is within the bounds even by its errors alone." in off.to_markdown()
 
 
 def test_csv_round_trip_and_markdown(tmp_path) -> None:

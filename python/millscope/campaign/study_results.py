@@ -416,8 +416,13 @@ class StudyResult:
         return tuple(p.setting for p in front)
 
     def cheapest(self, quantity: str = "energy", within: float = 0.05, *,
-                 cost: str = "wall_s", with_se: bool = True) -> Setting | None:
-        """The cheapest setting whose error stays within ``within``.
+                 cost: str = "wall_s", with_se: bool = True,
+                 also: Mapping[str, float] | None = None) -> Setting | None:
+        """The cheapest finished setting whose error stays within ``within`` at every load
+        level (and within the bounds of ``also``).
+
+        The reference qualifies (its error is 0), so a result equal to :meth:`reference`
+        means that none of the cheaper settings does.
 
         Parameters
         ----------
@@ -427,19 +432,67 @@ class StudyResult:
             Largest acceptable |error| (a fraction, e.g. 0.05 for 5 %).
         cost : {"wall_s", "particle_steps"}
         with_se : bool
-            Require |error| + 2 standard errors <= ``within`` (the error is below the bound
-            with about 97.5 % confidence), not just |error| <= ``within``.
+            Require |error| + 2 standard errors <= the bound (the error is below the bound
+            with about 97.5 % confidence), not just |error| <= the bound.
+        also : mapping of str to float, optional
+            Further bounds, quantity to largest |error|, that every level must keep too,
+            e.g. ``{"mean_torque": 0.02}``.
 
         Returns
         -------
         Setting or None
-            None when none qualifies.
+            None when none qualifies (a table without its reference's finished levels).
         """
-        bound = _checks.positive("within", within)
+        bounds = self._bounds(quantity, within, also)
         ok = [p for p in self.summary(quantity, cost)
-              if math.isfinite(p.error)
-              and p.error + (2.0 * p.error_se if with_se else 0.0) <= bound]
+              if self._keeps(p.setting, bounds, with_se)]
         return min(ok, key=lambda p: p.cost).setting if ok else None
+
+    def seeds_to_show(self, setting: Setting, quantity: str = "energy",
+                      within: float = 0.05) -> float:
+        """About how many seeds of both ``setting`` and the reference would show its error of
+        ``quantity`` within ``within`` (|error| + 2 standard errors <= the bound at every
+        level), were its error and seed spreads what they are now: the standard error falls
+        as 1 / sqrt(seeds). inf when its error is not below the bound, nan when unknown.
+        """
+        self._bounds(quantity, within, None)
+        need = math.nan
+        for r in self.rows:
+            if r.setting != setting:
+                continue
+            e = r.quantities[quantity]
+            if r.reference:
+                return float(r.seeds)
+            if not (math.isfinite(e.error) and math.isfinite(e.error_se)):
+                return math.nan
+            room = within - abs(e.error)
+            if room <= 0.0:
+                return math.inf
+            level = r.seeds * (2.0 * e.error_se / room) ** 2
+            need = level if math.isnan(need) else max(need, level)
+        return need
+
+    @staticmethod
+    def _bounds(quantity: str, within: float,
+                also: Mapping[str, float] | None) -> dict[str, float]:
+        _checks.choice("quantity", quantity, tuple(QUANTITIES))
+        bounds = {quantity: _checks.positive("within", within)}
+        for q, bound in (also or {}).items():
+            _checks.choice("also", q, tuple(QUANTITIES))
+            bounds[q] = _checks.positive(f"also[{q!r}]", bound)
+        return bounds
+
+    def _keeps(self, setting: Setting, bounds: Mapping[str, float], with_se: bool) -> bool:
+        """Whether every level of ``setting`` keeps every quantity within its bound."""
+        for r in self.rows:
+            if r.setting != setting:
+                continue
+            for q, bound in bounds.items():
+                e = r.quantities[q]
+                margin = 2.0 * e.error_se if with_se else 0.0
+                if not abs(e.error) + margin <= bound:  # nan fails
+                    return False
+        return True
 
     def record(self, run: StudyRun) -> TorqueRecord:
         """The stored torque record of a run (after the warm-up; N m against s)."""
@@ -597,11 +650,48 @@ class StudyResult:
             notes += ["", f"Per-unit energy of the reference: {ref_ratio.mean:.4g}, standard "
                       f"error {100 * se:.1f} % from {seeds} seeds; a 5 % standard error needs "
                       f"{max(need, 2)} seeds" + (" (met)." if se <= 0.05 else ".")]
+        notes += ["", self._recommendation(pareto_quantity, cost, names)]
         if self.pending:
             notes += ["", "Not finished yet (only their finished levels are shown, and they "
                       "stay off the Pareto front): "
                       + "; ".join(s.label for s in self.pending) + "."]
         return "\n".join(notes) + "\n"
+
+
+    def _recommendation(self, quantity: str, cost: str, names: Mapping[str, str]) -> str:
+        """The report's paragraph on the recommended setting (:data:`RECOMMENDED_WITHIN`)."""
+        torque, bound = RECOMMENDED_WITHIN
+        also = {"mean_torque": torque}
+        rule = (f"the cheapest setting whose mean torque stays within {100 * torque:g} % and "
+                f"whose {names[quantity]} stays within {100 * bound:g} % of the reference's "
+                "at every level, each error with 2 standard errors")
+        best = self.cheapest(quantity, bound, cost=cost, also=also)
+        unfinished = " among the finished settings" if self.pending else ""
+        if best is None:
+            return f"Recommended setting ({rule}): none yet, the reference is not finished."
+        if best != self.reference:
+            return f"Recommended setting ({rule}){unfinished}: **{best.label}**."
+        text = (f"Recommended setting ({rule}){unfinished}: **none of the cheaper settings "
+                "qualifies**.")
+        likely = [p for p in self.summary(quantity, cost) if not p.reference
+                  and self._keeps(p.setting, {quantity: bound, **also}, with_se=False)]
+        if not likely:
+            return text + " None is within the bounds even by its errors alone."
+        first = min(likely, key=lambda p: p.cost).setting
+        need = max(self.seeds_to_show(first, quantity, bound),
+                   self.seeds_to_show(first, "mean_torque", torque))
+        seeds = (f"about {math.ceil(need)} seeds of it and of the reference"
+                 if math.isfinite(need) else "more seeds than its spread tells")
+        labels = [p.setting.label for p in sorted(likely, key=lambda p: p.cost)]
+        which = (f"{labels[0]} keeps" if len(labels) == 1
+                 else f"{', '.join(labels[:-1])} and {labels[-1]} keep")
+        return (text + f" By their errors alone, without the noise, {which} the bounds; "
+                f"showing it for {first.label} would take {seeds}.")
+
+
+#: The bounds of the recommended setting: the mean torque's |error| and the study quantity's
+#: (the per-unit energy, or the energy), as fractions of the reference.
+RECOMMENDED_WITHIN = (0.02, 0.05)
 
 
 def _float(text: str) -> float:
