@@ -44,6 +44,7 @@ namespace millscope::engine::HWY_NAMESPACE {
 LaneKernels kernels_of_target() {
   LaneKernels k;
   k.contact_forces = contact_loop;  // null: the next narrower path's (make_paths)
+  k.wall_forces = wall_loop;
 #if !(HWY_TARGET & (HWY_EMU128 | HWY_SCALAR))
   k.path.pair_lanes = hwy::HWY_NAMESPACE::Lanes(hwy::HWY_NAMESPACE::ScalableTag<double>());
   const WideSearches wide;
@@ -74,7 +75,7 @@ std::string path_name(std::int64_t target) {
 /// Every path this build runs on this CPU, widest first, "portable" last. Each target's
 /// kernels are taken from Highway's table (HWY_EXPORT) at the index its dispatch would use for
 /// that target alone (a ChosenTarget of our own: Highway's process-wide one is left alone). A
-/// target without its own contact loop takes the next narrower path's.
+/// target without its own contact loops takes the next narrower path's.
 std::vector<LaneKernels> make_paths() {
   std::vector<LaneKernels> paths;
   for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) {
@@ -89,8 +90,10 @@ std::vector<LaneKernels> make_paths() {
   portable.path = SimdPath{"portable", 1};
   for (auto& row : portable.touching_pairs) row[0] = row[1] = nullptr;
   paths.push_back(portable);
-  for (std::size_t p = paths.size() - 1; p-- > 0;)
+  for (std::size_t p = paths.size() - 1; p-- > 0;) {
     if (paths[p].contact_forces == nullptr) paths[p].contact_forces = paths[p + 1].contact_forces;
+    if (paths[p].wall_forces == nullptr) paths[p].wall_forces = paths[p + 1].wall_forces;
+  }
   return paths;
 }
 

@@ -18,8 +18,10 @@ struct LaneKernels {
   SimdPath path;
   /// The wide search (touching_pairs.hpp), [periodic][prefetch]; null for the portable search.
   TouchingPairsSearch touching_pairs[2][2] = {};
-  /// The paper's law for a block of contacts (contact_lanes.hpp).
+  /// The paper's law for a block of contacts, and for a chunk's contacts with the drum
+  /// (contact_lanes.hpp).
   ContactForcesInLanes contact_forces = nullptr;
+  WallForcesInLanes wall_forces = nullptr;
 };
 
 /// The kernels of path `name`, as simd_path(name) chooses it.

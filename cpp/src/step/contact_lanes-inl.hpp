@@ -28,26 +28,57 @@ namespace millscope::engine::HWY_NAMESPACE {
 // the AVX-512 path takes the AVX2 build (lane_kernels.cpp), as the engine did before it
 // dispatched through Highway, and the build is spared a target.
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-/// This target's build of the loop: none.
+/// This target's builds of the loops: none.
 inline constexpr ContactForcesInLanes contact_loop = nullptr;
+inline constexpr WallForcesInLanes wall_loop = nullptr;
 #else
 
 /// The paper's law (contact::HertzMindlin: Hertz (1), viscous damping (2), Mindlin no-slip
-/// spring (5)-(7) with the Coulomb limit (8), unclamped) for every contact of a block, written
-/// branch-free so that the compiler computes several contacts in the lanes of one instruction
-/// (`omp simd`; the sliding select needs -fno-trapping-math). Every operation is the one
-/// contact::pair_force does, in the same order and unfused (-ffp-contract=off), so the forces
-/// are the same to the bit on every target (tests: a run with the energy ledger, which takes
-/// contact::pair_force, moves the same).
-/// Particles are read through the pairs' indices (radius r, m; inverse mass, 1/kg; velocity,
-/// m/s; spin, rad/s); `pairs` holds the pair constants; dt, s, advances the springs.
+/// spring (5)-(7) with the Coulomb limit (8), unclamped) for one contact in one lane: unit
+/// normal n (into the particle i the force acts on), overlap d_n, m, R*, m; m*, kg; the
+/// contact point's velocity relative to the other body v_r, m/s; dt, s. Advances the spring
+/// s (m) and gives the force F on i (N) and c = n x F_t (N), whose torque on a body at
+/// -r n from the contact is -r c. Every operation is the one contact::pair_force does, in the
+/// same order and unfused (-ffp-contract=off), so the forces are the same to the bit on every
+/// target; branch-free, so that the loops that call it keep their lanes (the sliding select
+/// needs -fno-trapping-math).
+HWY_INLINE void law_in_lane(const materials::PairConstants& p, double nx, double ny, double nz,
+                            double d_n, double r_star, double m_star, double vrx, double vry,
+                            double vrz, double dt, double& sx, double& sy, double& sz,
+                            double& fx, double& fy, double& fz, double& cx, double& cy,
+                            double& cz) {
+  using Normal = contact::HertzMindlin::normal_part;
+  using Damping = contact::HertzMindlin::damping_part;
+  using Tangential = contact::HertzMindlin::tangential_part;
+  const double v_n = vrx * nx + vry * ny + vrz * nz;
+  const double vtx = vrx - v_n * nx, vty = vry - v_n * ny, vtz = vrz - v_n * nz;
+  const double sqrt_rd = std::sqrt(r_star * d_n);
+  const double s_n = Normal::stiffness(p, sqrt_rd);            // (4)
+  const double gamma_n = Damping::gamma(p, s_n, m_star);       // (2)
+  const double f_n = Normal::force(s_n, d_n) - gamma_n * v_n;  // (1), (2)
+  const double s_t = Tangential::stiffness(p, sqrt_rd);        // (6)
+  double tsx = sx, tsy = sy, tsz = sz;
+  Tangential::turn(tsx, tsy, tsz, nx, ny, nz);
+  Tangential::advance(tsx, tsy, tsz, vtx, vty, vtz, dt);
+  const double gamma_t = gamma_n * p.tangential_damping_ratio;  // (7)
+  double ftx, fty, ftz;
+  Tangential::trial(s_t, gamma_t, tsx, tsy, tsz, vtx, vty, vtz, ftx, fty, ftz);  // (5), (7)
+  const bool sliding = Tangential::limit(p, f_n, ftx, fty, ftz);                 // (8)
+  sx = sliding ? -ftx / s_t : tsx;
+  sy = sliding ? -fty / s_t : tsy;
+  sz = sliding ? -ftz / s_t : tsz;
+  fx = f_n * nx + ftx, fy = f_n * ny + fty, fz = f_n * nz + ftz;
+  cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
+}
+
+/// The law for every contact of a block (law_in_lane), several contacts in the lanes of one
+/// instruction (`omp simd`). Particles are read through the pairs' indices (radius r, m;
+/// inverse mass, 1/kg; velocity, m/s; spin, rad/s); `pairs` holds the pair constants; dt, s,
+/// advances the springs.
 void contact_forces_in_lanes(
     ContactBatch& b, const materials::PairConstants* pairs, const double* r, const double* inv_m,
     const double* vx, const double* vy, const double* vz, const double* wx, const double* wy,
     const double* wz, double dt) {
-  using Normal = contact::HertzMindlin::normal_part;
-  using Damping = contact::HertzMindlin::damping_part;
-  using Tangential = contact::HertzMindlin::tangential_part;
   const std::size_t n = b.size;
   const std::uint32_t* __restrict bi = b.i.data();
   const std::uint32_t* __restrict bj = b.j.data();
@@ -71,7 +102,6 @@ void contact_forces_in_lanes(
 #pragma omp simd
   for (std::size_t c = 0; c < n; ++c) {
     const std::uint32_t i = bi[c], j = bj[c];
-    const materials::PairConstants& p = pairs[bp[c]];
     const double dx = dxs[c], dy = dys[c], dz = dzs[c];
     const double ri = r[i], rj = r[j], r_sum = ri + rj;
     const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
@@ -86,33 +116,63 @@ void contact_forces_in_lanes(
     const double r_star = ri * rj / r_sum;
     const double m_star = 1.0 / (inv_m[i] + inv_m[j]);
     const double d_n = r_sum - dist;
-    const double v_n = vrx * nx + vry * ny + vrz * nz;
-    const double vtx = vrx - v_n * nx, vty = vry - v_n * ny, vtz = vrz - v_n * nz;
-    const double sqrt_rd = std::sqrt(r_star * d_n);
-    const double s_n = Normal::stiffness(p, sqrt_rd);            // (4)
-    const double gamma_n = Damping::gamma(p, s_n, m_star);       // (2)
-    const double f_n = Normal::force(s_n, d_n) - gamma_n * v_n;  // (1), (2)
-    const double s_t = Tangential::stiffness(p, sqrt_rd);        // (6)
-    double sx = sxs[c], sy = sys[c], sz = szs[c];
-    Tangential::turn(sx, sy, sz, nx, ny, nz);
-    Tangential::advance(sx, sy, sz, vtx, vty, vtz, dt);
-    const double gamma_t = gamma_n * p.tangential_damping_ratio;  // (7)
-    double ftx, fty, ftz;
-    Tangential::trial(s_t, gamma_t, sx, sy, sz, vtx, vty, vtz, ftx, fty, ftz);  // (5), (7)
-    const bool sliding = Tangential::limit(p, f_n, ftx, fty, ftz);              // (8)
-    sxs[c] = sliding ? -ftx / s_t : sx;
-    sys[c] = sliding ? -fty / s_t : sy;
-    szs[c] = sliding ? -ftz / s_t : sz;
+    double cx, cy, cz;
+    law_in_lane(pairs[bp[c]], nx, ny, nz, d_n, r_star, m_star, vrx, vry, vrz, dt, sxs[c],
+                sys[c], szs[c], fxs[c], fys[c], fzs[c], cx, cy, cz);
     overlaps[c] = d_n;
-    fxs[c] = f_n * nx + ftx, fys[c] = f_n * ny + fty, fzs[c] = f_n * nz + ftz;
-    const double cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
     tixs[c] = -ri * cx, tiys[c] = -ri * cy, tizs[c] = -ri * cz;  // (-r_i n) x F_t
     tjxs[c] = -rj * cx, tjys[c] = -rj * cy, tjzs[c] = -rj * cz;  // (r_j n) x (-F_t)
   }
 }
 
-/// This target's build of the loop.
+/// The law for every contact of a WallBatch (law_in_lane with R* = r_i and m* = m_i, as
+/// contact::pair_force is called by the drum pass), several contacts in the lanes of one
+/// instruction. The drum turns at omega, rad/s, about +z; particles are read through the
+/// contacts' indices (radius r, m; mass m, kg; velocity, m/s; spin, rad/s); dt, s, advances
+/// the springs.
+void wall_forces_in_lanes(WallBatch& b, const materials::PairConstants* pairs, const double* r,
+                          const double* m, const double* vx, const double* vy, const double* vz,
+                          const double* wx, const double* wy, const double* wz, double omega,
+                          double dt) {
+  const std::size_t n = b.size;
+  const std::uint32_t* __restrict bi = b.i.data();
+  const std::uint32_t* __restrict bp = b.pair.data();
+  const double* __restrict nxs = b.nx.data();
+  const double* __restrict nys = b.ny.data();
+  const double* __restrict nzs = b.nz.data();
+  const double* __restrict overlaps = b.overlap.data();
+  const double* __restrict pxs = b.px.data();
+  const double* __restrict pys = b.py.data();
+  double* __restrict sxs = b.sx.data();
+  double* __restrict sys = b.sy.data();
+  double* __restrict szs = b.sz.data();
+  double* __restrict fxs = b.fx.data();
+  double* __restrict fys = b.fy.data();
+  double* __restrict fzs = b.fz.data();
+  double* __restrict txs = b.tx.data();
+  double* __restrict tys = b.ty.data();
+  double* __restrict tzs = b.tz.data();
+#pragma omp simd
+  for (std::size_t c = 0; c < n; ++c) {
+    const std::uint32_t i = bi[c];
+    const double nx = nxs[c], ny = nys[c], nz = nzs[c];
+    const double ri = r[i];
+    // the contact point's velocity relative to the drum's surface there (drum::
+    // surface_velocity, omega x p): (v_i - omega x p) + w_i x (-r_i n)
+    const double ax = -ri * nx, ay = -ri * ny, az = -ri * nz;
+    const double vrx = (vx[i] - -omega * pys[c]) + (wy[i] * az - wz[i] * ay);
+    const double vry = (vy[i] - omega * pxs[c]) + (wz[i] * ax - wx[i] * az);
+    const double vrz = (vz[i] - 0.0) + (wx[i] * ay - wy[i] * ax);
+    double cx, cy, cz;
+    law_in_lane(pairs[bp[c]], nx, ny, nz, overlaps[c], ri, m[i], vrx, vry, vrz, dt, sxs[c],
+                sys[c], szs[c], fxs[c], fys[c], fzs[c], cx, cy, cz);
+    txs[c] = -ri * cx, tys[c] = -ri * cy, tzs[c] = -ri * cz;  // (-r_i n) x F_t
+  }
+}
+
+/// This target's builds of the loops.
 inline constexpr ContactForcesInLanes contact_loop = &contact_forces_in_lanes;
+inline constexpr WallForcesInLanes wall_loop = &wall_forces_in_lanes;
 #endif  // a build of the loop
 
 }  // namespace millscope::engine::HWY_NAMESPACE

@@ -63,4 +63,43 @@ using ContactForcesInLanes = void (*)(ContactBatch& b, const materials::PairCons
                                       const double* vy, const double* vz, const double* wx,
                                       const double* wy, const double* wz, double dt);
 
+/// One thread's contacts with the drum of a chunk of particles, in particle order and, per
+/// particle, in the order drum::find_contacts_of gives them, as arrays: the particle pass finds
+/// them (step/drum_pass.hpp), computes their forces in SIMD lanes (wall_forces_in_lanes), then
+/// adds them to the particles and to the drive torque in the same order.
+struct WallBatch {
+  static constexpr std::size_t per_particle = 5;  // shell, two end walls, two lifters
+  std::size_t size = 0;
+  std::vector<std::uint32_t> i, pair;           // particles, pair constants
+  std::vector<std::uint8_t> part;               // drum::Part
+  std::vector<double*> spring;                  // each contact's history slot
+  std::vector<double> nx, ny, nz;               // normal from the wall into the sphere
+  std::vector<double> overlap;                  // d_n, m
+  std::vector<double> px, py;                   // contact point on the wall, m (z unused)
+  std::vector<double> sx, sy, sz;               // tangential spring d_t, m: in, then out
+  std::vector<double> fx, fy, fz;               // force on the particle, N
+  std::vector<double> tx, ty, tz;               // torque on the particle, N m
+
+  /// Room for the contacts of `particles` particles.
+  explicit WallBatch(std::size_t particles) {
+    const std::size_t room = per_particle * particles;
+    for (auto* v : {&i, &pair}) v->resize(room);
+    part.resize(room);
+    spring.resize(room);
+    for (auto* v : {&nx, &ny, &nz, &overlap, &px, &py, &sx, &sy, &sz, &fx, &fy, &fz, &tx, &ty,
+                    &tz})
+      v->resize(room);
+  }
+};
+
+/// The paper's law for every contact of a WallBatch, in SIMD lanes (contact_lanes-inl.hpp),
+/// the same to the bit as contact::pair_force with R* = r_i and m* = m_i as the drum pass
+/// calls it. The drum turns at omega, rad/s, about +z; particles are read through the
+/// contacts' indices (radius r, m; mass m, kg; velocity, m/s; spin, rad/s); dt, s, advances
+/// the springs.
+using WallForcesInLanes = void (*)(WallBatch& b, const materials::PairConstants* pairs,
+                                   const double* r, const double* m, const double* vx,
+                                   const double* vy, const double* vz, const double* wx,
+                                   const double* wy, const double* wz, double omega, double dt);
+
 }  // namespace millscope::engine

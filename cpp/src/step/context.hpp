@@ -112,6 +112,10 @@ struct Engine::Access::Step {
   // One per share, made by the thread that runs it (see run.hpp), so that its arrays come
   // from that thread's allocator arena and share no cache line with another thread's.
   std::vector<std::unique_ptr<ContactBatch>> batches;
+  std::vector<std::unique_ptr<WallBatch>> wall_batches;  // likewise, for the drum's contacts
+  // The particle pass works in chunks of this many particles, which stay in the first-level
+  // cache: 1 KiB of each of the ~20 arrays it reads.
+  static constexpr std::size_t particle_chunk = 128;
   std::string error;  // written by the master thread; a run stops when it is set
 
   Step(Engine& engine, StepObserver* obs);
@@ -150,7 +154,15 @@ struct Engine::Access::Step {
   void pair_pass(int t, double history_dt, StepPartial& part);  // pair_pass.hpp
   void pair_pass_in_lanes(int t, double history_dt, StepPartial& part, std::size_t row_begin,
                           std::size_t own_end, double* const* buffered);  // pair_pass_lanes.hpp
+  template <class Visit>
+  void each_drum_contact(std::size_t i, double history_dt, StepPartial& part,
+                         Visit&& visit);                                      // drum_pass.hpp
   void drum_contacts(std::size_t i, double history_dt, StepPartial& part);  // drum_pass.hpp
+  void collect_drum_contacts(std::size_t i, double history_dt, StepPartial& part,
+                             WallBatch& b);                                   // drum_pass.hpp
+  void add_drum_contacts(const WallBatch& b, StepPartial& part);            // drum_pass.hpp
+  static void add_drive_torque(StepPartial& part, drum::Part where, double px, double py,
+                               double fx, double fy);                         // drum_pass.hpp
   void particle_pass(int t, double history_dt, bool kick, StepPartial& part);  // particle_pass.hpp
   bool close_step(const StepPartial* parts, double ledger_dt, bool master, long step);  // close.hpp
   bool list_upkeep(int w, int workers, const StepPartial* parts, bool guarded, long step,
@@ -197,7 +209,8 @@ Engine::Access::Step<S>::Step(Engine& engine, StepObserver* obs)
       prefetch(wide && engine.prefetch_partners()),
       ahead{{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m}},
       partial(2 * static_cast<std::size_t>(team)),
-      batches(static_cast<std::size_t>(team)) {
+      batches(static_cast<std::size_t>(team)),
+      wall_batches(static_cast<std::size_t>(team)) {
   // A rebuild is due once a particle may have moved skin/2 since the last build. The
   // reference positions are floats: each coordinate is off by at most half an ulp of the
   // drum's largest extent, so the test moves the threshold in by that much (x sqrt(3), and

@@ -1,28 +1,42 @@
-// Stage: the drum's contacts of one particle (Engine::Access::Step), called by the particle
-// pass for the particles near the drum (those that may touch it before the next
-// refresh_walls): shell, end walls and lifters, added to the particle's sums (force, N;
-// torque, N m; with the ledger, the dissipating force and its torque), and the drive torque.
+// Stage: the drum's contacts of a particle (Engine::Access::Step), called by the particle pass
+// for the particles near the drum (those that may touch it before the next refresh_walls):
+// shell, end walls and lifters, added to the particle's sums (force, N; torque, N m; with the
+// ledger, the dissipating force and its torque), and the drive torque.
+// - each_drum_contact finds them and keeps each one's slot of wall history;
+// - drum_contacts computes them one at a time (contact::pair_force);
+// - collect_drum_contacts and add_drum_contacts, for the paper's law without the ledger, put a
+//   chunk's contacts in a WallBatch, whose forces the SIMD path computes in lanes
+//   (wall_forces_in_lanes), and then add them up in the same order, to the same bits.
 #pragma once
 
 #include "step/context.hpp"
 
 namespace millscope::engine {
 
+// Drive torque: ((x_c - axis) x F_drum_on_particle) . z (docs/architecture.md, Torque), from
+// the contact point (px, py), m, and the force on the particle (fx, fy), N; booked by the part
+// of the drum it acts on.
 template <class S>
-void Engine::Access::Step<S>::drum_contacts(std::size_t i, double history_dt, StepPartial& part) {
+void Engine::Access::Step<S>::add_drive_torque(StepPartial& part, drum::Part where, double px,
+                                               double py, double fx, double fy) {
+  const double arm_torque = px * fy - py * fx;
+  if (where == drum::Part::shell) {
+    part.shell += arm_torque;
+  } else if (where == drum::Part::lifter) {
+    part.lifters += arm_torque;
+  } else {
+    part.ends += arm_torque;
+  }
+}
+
+template <class S>
+template <class Visit>
+void Engine::Access::Step<S>::each_drum_contact(std::size_t i, double history_dt,
+                                                StepPartial& part, Visit&& visit) {
   const Vec3 xi(x[i], y[i], z[i]);
   drum::WallContacts found = drum::find_contacts_of<Lifters, EndWalls>(
       geom, e.lifter_angles_, xi, r[i], Lifters ? e.lifter_reach_[i] : drum::no_lifter);
   if (found.count == 0 && (!friction || e.wall_held_[i] == 0)) return;  // nothing to do
-  const double omega = e.omega_;
-  Vec3 f = sums_of(0, i);
-  Vec3 tq = friction ? sums_of(3, i) : Vec3(0.0, 0.0, 0.0);
-  [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
-  if constexpr (dissipates) {
-    diss = sums_of(6, i);
-    if constexpr (friction) diss_tq = sums_of(9, i);
-  }
-  const Vec3 vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
   [[maybe_unused]] unsigned used = 0;  // wall history slots touched this step
   [[maybe_unused]] std::int32_t* lifter_of_slot = nullptr;
   [[maybe_unused]] double* wall_hist = nullptr;
@@ -65,34 +79,7 @@ void Engine::Access::Step<S>::drum_contacts(std::size_t i, double history_dt, St
       hist = wall_hist + slot * hs;
     }
     if (wc.overlap > max_overlap * r[i]) part.note_overlap(i, wc.overlap / r[i], true);
-    const Vec3 v_wall = drum::surface_velocity(omega, wc.point);
-    Vec3 v_rel = vi - v_wall;
-    if constexpr (friction) v_rel += wi.cross(-r[i] * wc.normal);
-    const contact::PairForce pf = contact::pair_force<Law, dissipates>(
-        wall_pair_of(i), wc.normal, wc.overlap, r[i], m[i], v_rel, r[i], 0.0, history_dt, hist);
-    f += pf.force_i;
-    // Drive torque: ((x_c - axis) x F_drum_on_particle) . z (docs/architecture.md, Torque).
-    const double arm_torque = wc.point.x() * pf.force_i.y() - wc.point.y() * pf.force_i.x();
-    if (wc.part == drum::Part::shell) {
-      part.shell += arm_torque;
-    } else if (wc.part == drum::Part::lifter) {
-      part.lifters += arm_torque;
-    } else {
-      part.ends += arm_torque;
-    }
-    if constexpr (dissipates) {
-      part.damping_power += pf.damping_power;
-      part.loss += pf.loss;
-      diss += pf.dissipative;
-      if constexpr (friction) diss_tq += wc.normal.cross(pf.dissipative) * -r[i];
-    }
-    if constexpr (friction) {
-      tq += pf.torque_i;
-      if constexpr (dissipates) {
-        part.friction_loss += pf.friction_loss;
-        part.spring_work += pf.spring_work;
-      }
-    }
+    visit(wc, hist);
   }
   if constexpr (friction) {
     // Contacts that ended: clear their history and free their lifter slot.
@@ -109,11 +96,82 @@ void Engine::Access::Step<S>::drum_contacts(std::size_t i, double history_dt, St
     }
     e.wall_held_[i] = static_cast<std::uint8_t>(used);
   }
+}
+
+template <class S>
+void Engine::Access::Step<S>::drum_contacts(std::size_t i, double history_dt, StepPartial& part) {
+  const double omega = e.omega_;
+  const Vec3 vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
+  // The particle's sums, taken once and put back once (each_drum_contact visits its contacts
+  // in order, and the sums add them in that order).
+  Vec3 f = sums_of(0, i);
+  Vec3 tq = friction ? sums_of(3, i) : Vec3(0.0, 0.0, 0.0);
+  [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
+  if constexpr (dissipates) {
+    diss = sums_of(6, i);
+    if constexpr (friction) diss_tq = sums_of(9, i);
+  }
+  bool touched = false;
+  each_drum_contact(i, history_dt, part, [&](const drum::WallContact& wc, double* hist) {
+    touched = true;
+    const Vec3 v_wall = drum::surface_velocity(omega, wc.point);
+    Vec3 v_rel = vi - v_wall;
+    if constexpr (friction) v_rel += wi.cross(-r[i] * wc.normal);
+    const contact::PairForce pf = contact::pair_force<Law, dissipates>(
+        wall_pair_of(i), wc.normal, wc.overlap, r[i], m[i], v_rel, r[i], 0.0, history_dt, hist);
+    f += pf.force_i;
+    add_drive_torque(part, wc.part, wc.point.x(), wc.point.y(), pf.force_i.x(),
+                     pf.force_i.y());
+    if constexpr (dissipates) {
+      part.damping_power += pf.damping_power;
+      part.loss += pf.loss;
+      diss += pf.dissipative;
+      if constexpr (friction) diss_tq += wc.normal.cross(pf.dissipative) * -r[i];
+    }
+    if constexpr (friction) {
+      tq += pf.torque_i;
+      if constexpr (dissipates) {
+        part.friction_loss += pf.friction_loss;
+        part.spring_work += pf.spring_work;
+      }
+    }
+  });
+  if (!touched) return;
   put_sums(0, i, f);
   if constexpr (friction) put_sums(3, i, tq);
   if constexpr (dissipates) {
     put_sums(6, i, diss);
     if constexpr (friction) put_sums(9, i, diss_tq);
+  }
+}
+
+template <class S>
+void Engine::Access::Step<S>::collect_drum_contacts(std::size_t i, double history_dt,
+                                                    StepPartial& part, WallBatch& b) {
+  static_assert(in_lanes && hs == 3, "the lanes carry the spring d_t, 3 doubles");
+  each_drum_contact(i, history_dt, part, [&](const drum::WallContact& wc, double* hist) {
+    const std::size_t c = b.size++;
+    b.i[c] = static_cast<std::uint32_t>(i);
+    b.pair[c] = static_cast<std::uint32_t>(OneMaterial ? 0 : table.index(mat[i], drum_mat));
+    b.part[c] = static_cast<std::uint8_t>(wc.part);
+    b.spring[c] = hist;
+    b.nx[c] = wc.normal.x(), b.ny[c] = wc.normal.y(), b.nz[c] = wc.normal.z();
+    b.overlap[c] = wc.overlap;
+    b.px[c] = wc.point.x(), b.py[c] = wc.point.y();
+    b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
+  });
+}
+
+template <class S>
+void Engine::Access::Step<S>::add_drum_contacts(const WallBatch& b, StepPartial& part) {
+  for (std::size_t c = 0; c < b.size; ++c) {
+    const std::size_t i = b.i[c];
+    own[0][i] += b.fx[c], own[1][i] += b.fy[c], own[2][i] += b.fz[c];
+    own[3][i] += b.tx[c], own[4][i] += b.ty[c], own[5][i] += b.tz[c];
+    add_drive_torque(part, static_cast<drum::Part>(b.part[c]), b.px[c], b.py[c], b.fx[c],
+                     b.fy[c]);
+    double* const hist = b.spring[c];
+    hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
   }
 }
 

@@ -19,9 +19,8 @@ void Engine::Access::Step<S>::particle_pass(int t, double history_dt, bool kick,
                                             StepPartial& part) {
   const std::size_t lo = e.particle_split_[static_cast<std::size_t>(t)];
   const std::size_t hi = e.particle_split_[static_cast<std::size_t>(t) + 1];
-  constexpr std::size_t chunk = 128;  // particles: 1 KiB of each of the ~20 arrays read
-  for (std::size_t c0 = lo; c0 < hi; c0 += chunk) {
-    const std::size_t c1 = std::min(c0 + chunk, hi);
+  for (std::size_t c0 = lo; c0 < hi; c0 += particle_chunk) {
+    const std::size_t c1 = std::min(c0 + particle_chunk, hi);
     for (std::size_t i = c0; i < c1; ++i) fy[i] -= m[i] * gravity;
     for (int b = 0; b < team; ++b) {
       const std::size_t own_end = e.row_split_[static_cast<std::size_t>(b) + 1];
@@ -39,9 +38,22 @@ void Engine::Access::Step<S>::particle_pass(int t, double history_dt, bool kick,
     }
     // A particle that refresh_walls gave no block of wall history cannot reach the drum before
     // the next refresh (its margin): it skips the drum. Without friction there are no
-    // blocks, and every particle looks (find_contacts_of gives up early in the bulk).
-    for (std::size_t i = c0; i < c1; ++i)
-      if (!friction || e.wall_block_[i] >= 0) drum_contacts(i, history_dt, part);
+    // blocks, and every particle looks (find_contacts_of gives up early in the bulk). The
+    // paper's law without the ledger computes the chunk's contacts in SIMD lanes.
+    if constexpr (in_lanes) {
+      WallBatch& b = *wall_batches[static_cast<std::size_t>(t)];
+      b.size = 0;
+      for (std::size_t i = c0; i < c1; ++i)
+        if (e.wall_block_[i] >= 0) collect_drum_contacts(i, history_dt, part, b);
+      if (b.size > 0) {
+        lanes.wall_forces(b, OneMaterial ? &pc_one : &table(0, 0), r, m, vx, vy, vz, wx, wy, wz,
+                          e.omega_, history_dt);
+        add_drum_contacts(b, part);
+      }
+    } else {
+      for (std::size_t i = c0; i < c1; ++i)
+        if (!friction || e.wall_block_[i] >= 0) drum_contacts(i, history_dt, part);
+    }
     if (!kick) {  // a step's kick_drift checks it otherwise
       for (std::size_t i = c0; i < c1; ++i)
         if (!sound(i)) part.bad = std::min(part.bad, i);

@@ -54,6 +54,7 @@ void Engine::Access::Step<S>::run(long steps) {
     if constexpr (in_lanes) {
       each_share([&](int t) {
         batches[static_cast<std::size_t>(t)] = std::make_unique<ContactBatch>();
+        wall_batches[static_cast<std::size_t>(t)] = std::make_unique<WallBatch>(particle_chunk);
       });
     }
     bool failed = false;  // the same in every thread
