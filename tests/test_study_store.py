@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from millscope.app.case_files import load_campaign
 from millscope.app.cli import build_parser, main
 from millscope.campaign import Campaign
 from millscope.campaign.studies import (
@@ -315,3 +316,29 @@ def test_the_biases_quoted_for_a_group_are_its_cases_in_level_order() -> None:
         measured_bias("huge", "LDMS")
     with pytest.raises(ValueError, match="per_unit_energy and per_unit_energy_se"):
         ScaleBias("LDMS#4", 3, -0.1, 0.01, -0.9, 0.08, per_unit_energy=-0.2)
+
+
+def test_the_paper_campaign_takes_its_reference_levels_from_the_ldms_study(
+        tmp_path, monkeypatch) -> None:
+    """data/paper-campaign runs LDMS #1-#7 at the LDMS study's reference; its level-1 and
+    level-4 cases are the study's reference runs, in both sampling modes (the same hashes),
+    so adopting them copies exactly those, and each copy is the study's file."""
+    root = Path(__file__).resolve().parents[1]
+    monkeypatch.chdir(root)  # the campaign file's paths are relative to the checkout's top
+    plan = load_campaign("data/paper-campaign/campaign.toml")
+    study = read_study_plan(LDMS_STUDY)
+    reference = {c.hash() for k, _, _, c in study._cases
+                 if study.settings[k] in (study.reference,
+                                          study.reference.replace(sampling="mean"))}
+    camp = plan.campaign
+    shared = [d for d in camp.hashes if d in reference]
+    at_1_and_4 = [d for c, d in zip(camp.cases, camp.hashes, strict=True)
+                  if c.scene.name in ("LDMS#1", "LDMS#4")]
+    assert len(camp) == 7 * 2 * 2  # levels x seeds x sampling modes
+    assert shared == at_1_and_4 and len(shared) == 2 * 2 * 2
+    here = Campaign(camp.cases, tmp_path / "store", block=camp.block)
+    assert set(here.adopt([root / reuse for reuse in plan.reuse])) == set(shared)
+    for digest in shared:
+        copied = tmp_path / "store" / "cases" / f"{digest}.npz"
+        assert copied.read_bytes() == (LDMS_STUDY / "store" / "cases" /
+                                       copied.name).read_bytes()
