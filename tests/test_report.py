@@ -72,6 +72,23 @@ def test_the_report_holds_table_6_and_every_figure(store, report) -> None:
     assert "balls-MS" in text
 
 
+def test_fig_9_quotes_each_groups_torque_change_beside_the_papers(store, report) -> None:
+    """Fig. 9's caption: (max - min) / max of each group's mean torques per level (computed
+    here from the results, seed means per level), and the paper's bound of 9 %."""
+    results = [r for r in ms.Campaign.from_store(store).results() if r.status == "done"]
+    quoted = []
+    for group in ("LDMS", "HDHS"):
+        per_level: dict[int, list[float]] = {}
+        for r in results:
+            key = case_key(r.scene)
+            if r.scene.name.startswith(group) and key.load_level is not None:
+                per_level.setdefault(key.load_level, []).append(r.mean_torque)
+        means = np.array([np.mean(v) for _, v in sorted(per_level.items())])
+        quoted.append(f"{group} {100 * (means.max() - means.min()) / means.max():.1f} %")
+    assert (f"Largest change within a group, (max - min) / max: {', '.join(quoted)} (the "
+            "paper's Fig. 9: under 9 %).") in report.read_text()
+
+
 def test_each_group_with_3_levels_gets_its_calibration(store, report) -> None:
     results = ms.Campaign.from_store(store).results()
     path = report.parent / "calibration_LDMS.json"

@@ -15,6 +15,7 @@ unit of the group's largest energy (docs/architecture.md, Spectra); lengths in m
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -43,7 +44,8 @@ if TYPE_CHECKING:  # the figures stay below the simulation side (docs/architectu
 
 __all__ = ["plot_torque", "plot_spectrum", "plot_filtered", "plot_waterfall",
            "plot_spectra_grid", "plot_torque_levels", "plot_lth_levels", "plot_energy_levels",
-           "plot_energy_fit", "plot_energy_fits", "plot_accuracy", "plot_charge", "save_figure"]
+           "plot_energy_fit", "plot_energy_fits", "plot_accuracy", "plot_charge", "save_figure",
+           "torque_change"]
 
 
 class _NamedLine(Protocol):
@@ -509,6 +511,21 @@ def _plot_against_level(groups: Mapping[str, GroupSeries], *, ylabel: str, title
 TORQUE_PU_FLOOR = 0.9
 
 
+#: The paper's Fig. 9: the mean torque changes by less than this fraction over the load levels
+#: of a group.
+PAPER_TORQUE_CHANGE = 0.09
+
+
+def torque_change(torque_pu: ArrayLike) -> float:
+    """The largest change of the mean torque within a group, (max - min) / max of its values
+    per level (dimensionless; the paper's Fig. 9 stays under :data:`PAPER_TORQUE_CHANGE`);
+    nan when a value is not finite or none is positive."""
+    y = np.asarray(torque_pu, dtype=np.float64)
+    if y.size == 0 or not np.all(np.isfinite(y)) or not np.max(y) > 0:
+        return math.nan
+    return float((np.max(y) - np.min(y)) / np.max(y))
+
+
 def plot_torque_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,
                        ax: Axes | None = None, title: str | None = None,
                        floor: float | None = TORQUE_PU_FLOOR) -> Figure:
@@ -542,11 +559,8 @@ def plot_torque_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,
                               title=title or "Average torque against filling level", ax=ax,
                               intervals=False)
     axes = ax if ax is not None else fig.axes[0]
-    changes = {}
-    for name, (_, values) in groups.items():
-        y = np.asarray(values, dtype=np.float64)
-        if np.all(np.isfinite(y)) and np.max(y) > 0:
-            changes[name] = (np.max(y) - np.min(y)) / np.max(y)
+    changes = {name: torque_change(values) for name, (_, values) in groups.items()}
+    changes = {name: change for name, change in changes.items() if math.isfinite(change)}
     if changes:
         name = max(changes, key=lambda k: changes[k])
         axes.legend(fontsize="small", title_fontsize="small",

@@ -114,13 +114,23 @@ def _spectra(group: GroupAnalysis
     return spectra, labels, marks, [r.lth_distinct for r in cases]
 
 
+def _torque_changes(groups: list[GroupAnalysis]) -> str:
+    """Each group's largest change of the mean torque, beside the paper's bound."""
+    changes = [f"{g.name} {100 * plots.torque_change(g.torque_pu):.1f} %" for g in groups
+               if len(g.levels) > 1 and math.isfinite(plots.torque_change(g.torque_pu))]
+    if not changes:
+        return ""
+    return (" Largest change within a group, (max - min) / max: " + ", ".join(changes)
+            + f" (the paper's Fig. 9: under {100 * plots.PAPER_TORQUE_CHANGE:g} %).")
+
+
 def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
     figs = [_Figure("fig09_torque.png", "Fig. 9: average torque",
                     "Mean torque over the block per unit of each group's largest, against the "
                     "load level (mean over the repeats of a level). The axis starts at "
                     f"{plots.TORQUE_PU_FLOOR:g} per unit, not at the smallest value, so the "
                     "change with filling shows at its true size; the legend gives the largest "
-                    "change within a group.",
+                    "change within a group." + _torque_changes(groups),
                     lambda: plots.plot_torque_levels(
                         {g.name: (g.levels, g.torque_pu) for g in groups}))]
     for g in groups:
