@@ -618,3 +618,22 @@ def test_cheapest_first_must_be_a_flag(tmp_path) -> None:
     with pytest.raises(ValueError, match="cheapest_first = 'yes' is not valid"):
         run_study(TINY_PLAN, tmp_path / "store", cheapest_first="yes")  # type: ignore[arg-type]
     assert not (tmp_path / "store").exists()
+
+
+def test_the_report_gives_the_per_unit_energy_in_each_sampling_mode() -> None:
+    """The per-unit energy E(last level) / E(first level) of the reference and of the same
+    setting with interval-mean samples, each with the standard error of its seed mean,
+    std / mean / sqrt(seeds), computed here with numpy."""
+    ref = Setting(scale="soft", record_s=2.0, warm_up_s=1.0)
+    mean = ref.replace(sampling="mean")
+    plan = StudyPlan((ref, mean, ref.replace(dt_fraction=0.1)), reference=ref, seeds=(0, 1, 2),
+                     particles="ceramic", load_levels=(1, 4))
+    runs = _fake_runs(plan, np.random.default_rng(7))
+    text = StudyResult.from_runs(plan, runs).to_markdown()
+    for k, whose in ((0, "the reference"),
+                     (1, "the reference's setting with interval-mean samples")):
+        energy = {(r.load_level, r.seed): r.energy for r in runs if r.setting == k}
+        ratios = np.array([energy[4, s] / energy[1, s] for s in plan.seeds])
+        se = ratios.std(ddof=1) / ratios.mean() / np.sqrt(3)
+        assert (f"Per-unit energy of {whose}: {ratios.mean():.4g}, standard error "
+                f"{100 * se:.1f} % from 3 seeds") in text

@@ -22,6 +22,7 @@ from .. import _checks
 from .._files import atomic_write
 from .._frames import Kind, frame, frame_text
 from ..calibration.logfit import log_fit, per_unit
+from ..engine.simulation import other_sampling
 from ..model.presets import pilot_mill
 from ..signal.record import TorqueRecord
 from .study_plans import COSTS, KNOBS, LEVEL_QUANTITIES, QUANTITIES, Setting, StudyPlan
@@ -642,13 +643,22 @@ class StudyResult:
             f"of {'wall time' if cost == 'wall_s' else 'particle-steps'} against the "
             f"{names[pareto_quantity]} error.",
         ]
-        ref_ratio = ref_row.quantities["energy_ratio"]
-        if math.isfinite(ref_ratio.spread):
-            seeds = ref_row.seeds
-            se = ref_ratio.spread / math.sqrt(seeds)
-            need = math.ceil(seeds * (se / 0.05) ** 2)
-            notes += ["", f"Per-unit energy of the reference: {ref_ratio.mean:.4g}, standard "
-                      f"error {100 * se:.1f} % from {seeds} seeds; a 5 % standard error needs "
+        # The per-unit energy itself, of the reference and of the reference in the other
+        # sampling mode (a measure of its own, not an error of the reference's).
+        other = ref_row.setting.replace(sampling=other_sampling(ref_row.setting.sampling))
+        modes = {"instant": "instantaneous", "mean": "interval-mean"}
+        for whose, row in (("the reference", ref_row),
+                           (f"the reference's setting with {modes[other.sampling]} samples",
+                            next((r for r in self.rows if r.setting == other
+                                  and other not in self.pending), None))):
+            ratio = None if row is None else row.quantities["energy_ratio"]
+            if row is None or ratio is None or not (math.isfinite(ratio.std)
+                                                    and ratio.mean != 0.0):
+                continue
+            se = ratio.std / abs(ratio.mean) / math.sqrt(row.seeds)
+            need = math.ceil(row.seeds * (se / 0.05) ** 2)
+            notes += ["", f"Per-unit energy of {whose}: {ratio.mean:.4g}, standard error "
+                      f"{100 * se:.1f} % from {row.seeds} seeds; a 5 % standard error needs "
                       f"{max(need, 2)} seeds" + (" (met)." if se <= 0.05 else ".")]
         notes += ["", self._recommendation(pareto_quantity, cost, names)]
         if self.pending:
