@@ -651,9 +651,10 @@ class StudyResult:
                            (f"the reference's setting with {modes[other.sampling]} samples",
                             next((r for r in self.rows if r.setting == other
                                   and other not in self.pending), None))):
-            ratio = None if row is None else row.quantities["energy_ratio"]
-            if row is None or ratio is None or not (math.isfinite(ratio.std)
-                                                    and ratio.mean != 0.0):
+            if row is None:
+                continue
+            ratio = row.quantities["energy_ratio"]
+            if not (math.isfinite(ratio.std) and ratio.mean != 0.0):
                 continue
             se = ratio.std / abs(ratio.mean) / math.sqrt(row.seeds)
             need = math.ceil(row.seeds * (se / 0.05) ** 2)
@@ -666,7 +667,6 @@ class StudyResult:
                       "stay off the Pareto front): "
                       + "; ".join(s.label for s in self.pending) + "."]
         return "\n".join(notes) + "\n"
-
 
     def _recommendation(self, quantity: str, cost: str, names: Mapping[str, str]) -> str:
         """The report's paragraph on the recommended setting (:data:`RECOMMENDED_WITHIN`)."""
@@ -688,10 +688,11 @@ class StudyResult:
         if not likely:
             return text + " None is within the bounds even by its errors alone."
         first = min(likely, key=lambda p: p.cost).setting
-        need = max(self.seeds_to_show(first, quantity, bound),
-                   self.seeds_to_show(first, "mean_torque", torque))
-        seeds = (f"about {math.ceil(need)} seeds of it and of the reference"
-                 if math.isfinite(need) else "more seeds than its spread tells")
+        needs = (self.seeds_to_show(first, quantity, bound),
+                 self.seeds_to_show(first, "mean_torque", torque))
+        seeds = (f"about {math.ceil(max(needs))} seeds of it and of the reference"
+                 if all(math.isfinite(n) for n in needs)
+                 else "seeds in a number its standard errors do not tell")
         labels = [p.setting.label for p in sorted(likely, key=lambda p: p.cost)]
         which = (f"{labels[0]} keeps" if len(labels) == 1
                  else f"{', '.join(labels[:-1])} and {labels[-1]} keep")
