@@ -306,8 +306,9 @@ def test_bad_campaign_files_are_one_line(tmp_path, monkeypatch, capsys) -> None:
          "[campaign] reuse = 'earlier' is not valid; it must be a list of campaign store "
          'directories, e.g. ["data/study-paper-ldms/store"]'),
         (edit(CAMPAIGN, "seeds = [0, 1]", 'seeds = [0, 1]\nreuse = ["nowhere"]'),
-         "[campaign] reuse: 'nowhere' is not valid; it must be an existing campaign store "
-         "directory (relative paths are relative to the working directory)"),
+         "[campaign] reuse = ['nowhere'] is not valid; it must list existing campaign store "
+         "directories ('nowhere' is not one; relative paths are relative to the working "
+         "directory)"),
         (edit(CAMPAIGN, "seeds = [0, 1]", "seeds = [0, 0]"),
          "[campaign] seeds = [0, 0] is not valid; it must be free of repeats"),
         (edit(CAMPAIGN, "block = [0.1, 0.5]", "block = [0.1, 0.9]"),

@@ -451,9 +451,9 @@ def _store_list(value: object, where: str) -> tuple[str, ...]:
                             "[\"data/study-paper-ldms/store\"]")
     for v in value:
         if not Path(v).is_dir():
-            raise CaseFileError(f"{where} reuse: {v!r} is not valid; it must be an existing "
-                                "campaign store directory (relative paths are relative to the "
-                                "working directory)")
+            raise CaseFileError(f"{where} reuse = {_checks.show(value)} is not valid; it must "
+                                f"list existing campaign store directories ({v!r} is not one; "
+                                "relative paths are relative to the working directory)")
     return tuple(value)
 
 
