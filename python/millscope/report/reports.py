@@ -116,8 +116,9 @@ def _spectra(group: GroupAnalysis
 
 def _torque_changes(groups: list[GroupAnalysis]) -> str:
     """Each group's largest change of the mean torque, beside the paper's bound."""
-    changes = [f"{g.name} {100 * plots.torque_change(g.torque_pu):.1f} %" for g in groups
-               if len(g.levels) > 1 and math.isfinite(plots.torque_change(g.torque_pu))]
+    each = {g.name: plots.torque_change(g.torque_pu) for g in groups if len(g.levels) > 1}
+    changes = [f"{name} {100 * change:.1f} %" for name, change in each.items()
+               if math.isfinite(change)]
     if not changes:
         return ""
     return (" Largest change within a group, (max - min) / max: " + ", ".join(changes)
