@@ -147,6 +147,14 @@ struct Engine::Access::Step {
   const materials::PairConstants& wall_pair_of(std::size_t i) const {
     return OneMaterial ? pc_one : table(static_cast<std::size_t>(mat[i]), drum_mat);
   }
+  /// The pair constants the lane kernels index (ContactBatch::pair, WallBatch::pair), and
+  /// the index of the pair of materials a and b in them.
+  const materials::PairConstants* lane_pairs() const {
+    return OneMaterial ? &pc_one : &table(0, 0);
+  }
+  std::uint32_t lane_pair(std::size_t a, std::size_t b) const {
+    return OneMaterial ? 0u : static_cast<std::uint32_t>(table.index(a, b));
+  }
 
   // The stages, each in its own file.
   template <bool Guard>

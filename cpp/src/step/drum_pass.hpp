@@ -102,18 +102,22 @@ template <class S>
 void Engine::Access::Step<S>::drum_contacts(std::size_t i, double history_dt, StepPartial& part) {
   const double omega = e.omega_;
   const Vec3 vi(vx[i], vy[i], vz[i]), wi(wx[i], wy[i], wz[i]);
-  // The particle's sums, taken once and put back once (each_drum_contact visits its contacts
-  // in order, and the sums add them in that order).
-  Vec3 f = sums_of(0, i);
-  Vec3 tq = friction ? sums_of(3, i) : Vec3(0.0, 0.0, 0.0);
+  // The particle's sums, taken at its first contact and put back once (each_drum_contact
+  // visits its contacts in order, and the sums add them in that order); a particle that
+  // touches nothing does not read them.
+  Vec3 f(0.0, 0.0, 0.0), tq(0.0, 0.0, 0.0);
   [[maybe_unused]] Vec3 diss(0.0, 0.0, 0.0), diss_tq(0.0, 0.0, 0.0);
-  if constexpr (dissipates) {
-    diss = sums_of(6, i);
-    if constexpr (friction) diss_tq = sums_of(9, i);
-  }
   bool touched = false;
   each_drum_contact(i, history_dt, part, [&](const drum::WallContact& wc, double* hist) {
-    touched = true;
+    if (!touched) {
+      touched = true;
+      f = sums_of(0, i);
+      if constexpr (friction) tq = sums_of(3, i);
+      if constexpr (dissipates) {
+        diss = sums_of(6, i);
+        if constexpr (friction) diss_tq = sums_of(9, i);
+      }
+    }
     const Vec3 v_wall = drum::surface_velocity(omega, wc.point);
     Vec3 v_rel = vi - v_wall;
     if constexpr (friction) v_rel += wi.cross(-r[i] * wc.normal);
@@ -152,7 +156,7 @@ void Engine::Access::Step<S>::collect_drum_contacts(std::size_t i, double histor
   each_drum_contact(i, history_dt, part, [&](const drum::WallContact& wc, double* hist) {
     const std::size_t c = b.size++;
     b.i[c] = static_cast<std::uint32_t>(i);
-    b.pair[c] = static_cast<std::uint32_t>(OneMaterial ? 0 : table.index(mat[i], drum_mat));
+    b.pair[c] = lane_pair(mat[i], drum_mat);
     b.part[c] = static_cast<std::uint8_t>(wc.part);
     b.spring[c] = hist;
     b.nx[c] = wc.normal.x(), b.ny[c] = wc.normal.y(), b.nz[c] = wc.normal.z();

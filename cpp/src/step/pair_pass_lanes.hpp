@@ -45,7 +45,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       for (std::size_t q = 0; q < 6; ++q) own[q][i] += row_sum[6 * (i - block) + q];
   };
   ContactBatch& b = *batches[static_cast<std::size_t>(t)];
-  const materials::PairConstants* const pairs = OneMaterial ? &pc_one : &table(0, 0);
+  const materials::PairConstants* const pairs = lane_pairs();
   if (wide) {
     for (std::size_t block = row_begin; block < own_end;) {
       // 1. The touching pairs of the rows [block, block_end), which hold at most
@@ -65,9 +65,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       for (std::size_t c = 0; c < b.size; ++c) {
         const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
         b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
-        b.pair[c] = OneMaterial
-                        ? 0u
-                        : static_cast<std::uint32_t>(table.index(mat[b.i[c]], mat[b.j[c]]));
+        b.pair[c] = lane_pair(mat[b.i[c]], mat[b.j[c]]);
       }
       // A listed pair that does not touch has its history cleared; those that touch get
       // theirs back in phase 3.
@@ -104,7 +102,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
         b.i[c] = static_cast<std::uint32_t>(i);
         b.j[c] = static_cast<std::uint32_t>(j);
         b.slot[c] = s;
-        b.pair[c] = static_cast<std::uint32_t>(OneMaterial ? 0 : table.index(mat[i], mat[j]));
+        b.pair[c] = lane_pair(mat[i], mat[j]);
         b.dx[c] = dx, b.dy[c] = dy, b.dz[c] = dz;
         b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
       }
