@@ -560,7 +560,7 @@ def test_from_store_refuses_what_is_not_a_store(tmp_path: Path) -> None:
 
 def test_adopt_copies_the_finished_cases_another_store_holds(tmp_path: Path) -> None:
     """A campaign sharing cases with an earlier one copies their files (the same bytes, so the
-    same results) and runs only the rest; a damaged or failed case there is not taken.
+    same results) and runs only the rest; a damaged, misnamed or failed case there is not taken.
     Synthetic records stand in for the runs (tests/synthetic_campaign.py)."""
     from .synthetic_campaign import SyntheticExecutor, synthetic_store
 
@@ -574,6 +574,9 @@ def test_adopt_copies_the_finished_cases_another_store_holds(tmp_path: Path) -> 
     other = tmp_path / "other"  # a store without these cases: the search goes on
     other.mkdir()
     camp = ms.Campaign(scenes, tmp_path / "store", duration=14.0, block=(4.0, 14.0))
+    # A whole case file under another case's name is not that case.
+    misnamed = earlier / "cases" / camp.case_file(3).name
+    misnamed.write_bytes((earlier / "cases" / f"{first[0].hash}.npz").read_bytes())
     assert camp.adopt([other, earlier]) == (first[0].hash,)
     copied = camp.case_file(0)
     assert copied.read_bytes() == (earlier / "cases" / copied.name).read_bytes()

@@ -356,13 +356,14 @@ class Campaign:
                 if digest in finished:
                     continue
                 for src in sources:
-                    path = _case_path(src, digest)
+                    # The copy is what is checked, so the source is read once and what
+                    # lands is what passed.
                     try:
-                        _open_done(path)
+                        with atomic_path(_case_path(self._store, digest)) as tmp:
+                            shutil.copyfile(_case_path(src, digest), tmp)
+                            _open_done(tmp, digest)
                     except (_Unreadable, OSError):
                         continue  # missing or damaged there: try the next store
-                    with atomic_path(_case_path(self._store, digest)) as tmp:
-                        shutil.copyfile(path, tmp)
                     PartialFiles(self._store / PARTIAL_DIR, digest).remove()
                     copied.append(digest)
                     break

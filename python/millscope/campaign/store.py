@@ -40,13 +40,14 @@ class _Unreadable(Exception):
     """Why a case file cannot be read (one line)."""
 
 
-def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
+def _open_done(path: Path, digest: str | None = None) -> tuple[dict[str, Any], TorqueRecord]:
     """The ``meta["campaign"]`` and the record of a finished case's file.
 
     Raises :class:`_Unreadable` saying why unless the file is a whole, consistent case file:
     a zip whose checksums hold, the three arrays of record.py's format, samples a
     :class:`~millscope.record.TorqueRecord` accepts (finite, uniform), a stored case that
-    hashes to the file's name and the number of samples its settings give.
+    hashes to ``digest`` (by default the file's name) and the number of samples its settings
+    give.
     """
     try:
         record = TorqueRecord.load(path)  # every check of a record file (record.py)
@@ -60,7 +61,7 @@ def _open_done(path: Path) -> tuple[dict[str, Any], TorqueRecord]:
         raise _Unreadable(str(exc).removeprefix(f"{path}: ")) from None
     except (OSError, KeyError, TypeError, ValueError) as exc:
         raise _Unreadable(f"not a valid case file ({_one_line(exc)})") from None
-    if case.hash() != path.stem:
+    if case.hash() != (path.stem if digest is None else digest):
         raise _Unreadable(f"it holds case {case.hash()[:12]}, not the one its name says")
     expected = case.settings.total_samples - case.settings.warm_up_samples
     if len(record) != expected:
