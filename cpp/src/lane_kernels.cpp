@@ -43,8 +43,10 @@ namespace millscope::engine::HWY_NAMESPACE {
 /// the baseline has no vectors Highway uses) get no wide search: the portable one is faster.
 LaneKernels kernels_of_target() {
   LaneKernels k;
-  k.contact_forces = contact_loop;  // null: the next narrower path's (make_paths)
-  k.wall_forces = wall_loop;
+  for (int uniform = 0; uniform < 2; ++uniform) {  // null: the next narrower path's (make_paths)
+    k.contact_forces[uniform] = contact_loop[uniform];
+    k.wall_forces[uniform] = wall_loop[uniform];
+  }
 #if !(HWY_TARGET & (HWY_EMU128 | HWY_SCALAR))
   k.path.pair_lanes = hwy::HWY_NAMESPACE::Lanes(hwy::HWY_NAMESPACE::ScalableTag<double>());
   const WideSearches wide;
@@ -91,8 +93,12 @@ std::vector<LaneKernels> make_paths() {
   for (auto& row : portable.touching_pairs) row[0] = row[1] = nullptr;
   paths.push_back(portable);
   for (std::size_t p = paths.size() - 1; p-- > 0;) {
-    if (paths[p].contact_forces == nullptr) paths[p].contact_forces = paths[p + 1].contact_forces;
-    if (paths[p].wall_forces == nullptr) paths[p].wall_forces = paths[p + 1].wall_forces;
+    for (int uniform = 0; uniform < 2; ++uniform) {
+      auto& contact = paths[p].contact_forces[uniform];
+      auto& wall = paths[p].wall_forces[uniform];
+      if (contact == nullptr) contact = paths[p + 1].contact_forces[uniform];
+      if (wall == nullptr) wall = paths[p + 1].wall_forces[uniform];
+    }
   }
   return paths;
 }

@@ -19,9 +19,10 @@ struct LaneKernels {
   /// The wide search (touching_pairs.hpp), [periodic][prefetch]; null for the portable search.
   TouchingPairsSearch touching_pairs[2][2] = {};
   /// The paper's law for a block of contacts, and for a chunk's contacts with the drum
-  /// (contact_lanes.hpp).
-  ContactForcesInLanes contact_forces = nullptr;
-  WallForcesInLanes wall_forces = nullptr;
+  /// (contact_lanes.hpp), [uniform]: [1] where every contact has the pair constants pairs[0]
+  /// (one material in use), which the loop then need not read lane by lane.
+  ContactForcesInLanes contact_forces[2] = {};
+  WallForcesInLanes wall_forces[2] = {};
 };
 
 /// The kernels of path `name`, as simd_path(name) chooses it.

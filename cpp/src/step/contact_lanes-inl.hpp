@@ -29,8 +29,8 @@ namespace millscope::engine::HWY_NAMESPACE {
 // dispatched through Highway, and the build is spared a target.
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
 /// This target's builds of the loops: none.
-inline constexpr ContactForcesInLanes contact_loop = nullptr;
-inline constexpr WallForcesInLanes wall_loop = nullptr;
+inline constexpr ContactForcesInLanes contact_loop[2] = {nullptr, nullptr};
+inline constexpr WallForcesInLanes wall_loop[2] = {nullptr, nullptr};
 #else
 
 /// The paper's law (contact::HertzMindlin: Hertz (1), viscous damping (2), Mindlin no-slip
@@ -71,15 +71,32 @@ HWY_INLINE void law_in_lane(const materials::PairConstants& p, double nx, double
   cx = ny * ftz - nz * fty, cy = nz * ftx - nx * ftz, cz = nx * fty - ny * ftx;
 }
 
+/// The pair constants of contact c: `pairs[pair[c]]`, or, with one pair for all (Uniform),
+/// `one`, which the loop holds in registers (a vector loop reads an indexed constant lane by
+/// lane).
+template <bool Uniform>
+HWY_INLINE const materials::PairConstants& pair_in_lane(const materials::PairConstants& one,
+                                                         const materials::PairConstants* pairs,
+                                                         const std::uint32_t* pair,
+                                                         std::size_t c) {
+  if constexpr (Uniform) {
+    return one;
+  } else {
+    return pairs[pair[c]];
+  }
+}
+
 /// The law for every contact of a block (law_in_lane), several contacts in the lanes of one
 /// instruction (`omp simd`). Particles are read through the pairs' indices (radius r, m;
-/// inverse mass, 1/kg; velocity, m/s; spin, rad/s); `pairs` holds the pair constants; dt, s,
-/// advances the springs.
+/// inverse mass, 1/kg; velocity, m/s; spin, rad/s); `pairs` holds the pair constants (with
+/// Uniform, every contact's are pairs[0]); dt, s, advances the springs.
+template <bool Uniform>
 void contact_forces_in_lanes(
     ContactBatch& b, const materials::PairConstants* pairs, const double* r, const double* inv_m,
     const double* vx, const double* vy, const double* vz, const double* wx, const double* wy,
     const double* wz, double dt) {
   const std::size_t n = b.size;
+  const materials::PairConstants one = pairs[0];
   const std::uint32_t* __restrict bi = b.i.data();
   const std::uint32_t* __restrict bj = b.j.data();
   const std::uint32_t* __restrict bp = b.pair.data();
@@ -117,8 +134,8 @@ void contact_forces_in_lanes(
     const double m_star = 1.0 / (inv_m[i] + inv_m[j]);
     const double d_n = r_sum - dist;
     double cx, cy, cz;
-    law_in_lane(pairs[bp[c]], nx, ny, nz, d_n, r_star, m_star, vrx, vry, vrz, dt, sxs[c],
-                sys[c], szs[c], fxs[c], fys[c], fzs[c], cx, cy, cz);
+    law_in_lane(pair_in_lane<Uniform>(one, pairs, bp, c), nx, ny, nz, d_n, r_star, m_star, vrx,
+                vry, vrz, dt, sxs[c], sys[c], szs[c], fxs[c], fys[c], fzs[c], cx, cy, cz);
     overlaps[c] = d_n;
     tixs[c] = -ri * cx, tiys[c] = -ri * cy, tizs[c] = -ri * cz;  // (-r_i n) x F_t
     tjxs[c] = -rj * cx, tjys[c] = -rj * cy, tjzs[c] = -rj * cz;  // (r_j n) x (-F_t)
@@ -129,12 +146,14 @@ void contact_forces_in_lanes(
 /// contact::pair_force is called by the drum pass), several contacts in the lanes of one
 /// instruction. The drum turns at omega, rad/s, about +z; particles are read through the
 /// contacts' indices (radius r, m; mass m, kg; velocity, m/s; spin, rad/s); dt, s, advances
-/// the springs.
+/// the springs; with Uniform, every contact's pair constants are pairs[0].
+template <bool Uniform>
 void wall_forces_in_lanes(WallBatch& b, const materials::PairConstants* pairs, const double* r,
                           const double* m, const double* vx, const double* vy, const double* vz,
                           const double* wx, const double* wy, const double* wz, double omega,
                           double dt) {
   const std::size_t n = b.size;
+  const materials::PairConstants one = pairs[0];
   const std::uint32_t* __restrict bi = b.i.data();
   const std::uint32_t* __restrict bp = b.pair.data();
   const double* __restrict nxs = b.nx.data();
@@ -164,15 +183,17 @@ void wall_forces_in_lanes(WallBatch& b, const materials::PairConstants* pairs, c
     const double vry = (vy[i] - omega * pxs[c]) + (wz[i] * ax - wx[i] * az);
     const double vrz = (vz[i] - 0.0) + (wx[i] * ay - wy[i] * ax);
     double cx, cy, cz;
-    law_in_lane(pairs[bp[c]], nx, ny, nz, overlaps[c], ri, m[i], vrx, vry, vrz, dt, sxs[c],
-                sys[c], szs[c], fxs[c], fys[c], fzs[c], cx, cy, cz);
+    law_in_lane(pair_in_lane<Uniform>(one, pairs, bp, c), nx, ny, nz, overlaps[c], ri, m[i], vrx,
+                vry, vrz, dt, sxs[c], sys[c], szs[c], fxs[c], fys[c], fzs[c], cx, cy, cz);
     txs[c] = -ri * cx, tys[c] = -ri * cy, tzs[c] = -ri * cz;  // (-r_i n) x F_t
   }
 }
 
-/// This target's builds of the loops.
-inline constexpr ContactForcesInLanes contact_loop = &contact_forces_in_lanes;
-inline constexpr WallForcesInLanes wall_loop = &wall_forces_in_lanes;
+/// This target's builds of the loops: [uniform] (contact_lanes.hpp, LaneLoops).
+inline constexpr ContactForcesInLanes contact_loop[2] = {&contact_forces_in_lanes<false>,
+                                                         &contact_forces_in_lanes<true>};
+inline constexpr WallForcesInLanes wall_loop[2] = {&wall_forces_in_lanes<false>,
+                                                   &wall_forces_in_lanes<true>};
 #endif  // a build of the loop
 
 }  // namespace millscope::engine::HWY_NAMESPACE

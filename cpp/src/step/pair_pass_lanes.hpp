@@ -72,7 +72,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       std::fill(history + static_cast<std::size_t>(s0) * hs,
                 history + static_cast<std::size_t>(s1) * hs, 0.0);
       // 2. Their forces, several at a time.
-      lanes.contact_forces(b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
+      lanes.contact_forces[OneMaterial](b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
       sum_block(b, block, block_end);
       block = block_end;
     }
@@ -109,7 +109,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       ++block_end;
     }
     // 2. Their forces, several at a time.
-    lanes.contact_forces(b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
+    lanes.contact_forces[OneMaterial](b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
     sum_block(b, block, block_end);
     block = block_end;
   }

@@ -46,7 +46,8 @@ void Engine::Access::Step<S>::particle_pass(int t, double history_dt, bool kick,
       for (std::size_t i = c0; i < c1; ++i)
         if (e.wall_block_[i] >= 0) collect_drum_contacts(i, history_dt, part, b);
       if (b.size > 0) {
-        lanes.wall_forces(b, lane_pairs(), r, m, vx, vy, vz, wx, wy, wz, e.omega_, history_dt);
+        lanes.wall_forces[OneMaterial](b, lane_pairs(), r, m, vx, vy, vz, wx, wy, wz, e.omega_,
+                                       history_dt);
         add_drum_contacts(b, part);
       }
     } else {
