@@ -189,7 +189,7 @@ void wall_forces_in_lanes(WallBatch& b, const materials::PairConstants* pairs, c
   }
 }
 
-/// This target's builds of the loops: [uniform] (contact_lanes.hpp, LaneLoops).
+/// This target's builds of the loops, [uniform] as LaneKernels holds them.
 inline constexpr ContactForcesInLanes contact_loop[2] = {&contact_forces_in_lanes<false>,
                                                          &contact_forces_in_lanes<true>};
 inline constexpr WallForcesInLanes wall_loop[2] = {&wall_forces_in_lanes<false>,
