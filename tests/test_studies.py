@@ -372,6 +372,24 @@ def test_the_figure_marks_the_front_and_the_reference() -> None:
             for r in table.rows)), "slope_a")
 
 
+def test_the_figure_keeps_the_labels_of_close_points_apart() -> None:
+    """Two settings of nearly the same cost and error (as the LDMS study's dt 0.4 T_R and
+    2.5 s block): their labels' boxes do not overlap, and each stays beside its point."""
+    table = _table([(100.0, 0.0), (50.0, 0.012), (51.0, 0.016), (52.0, 0.014), (1.0, 0.2)])
+    fig = plots.plot_accuracy(table, "energy")
+    ax = fig.axes[0]
+    boxes = [t.get_window_extent() for t in ax.texts]
+    assert len(boxes) == 5
+    for a in range(len(boxes)):
+        for b in range(a):
+            assert not boxes[a].overlaps(boxes[b]), (ax.texts[a].get_text(),
+                                                     ax.texts[b].get_text())
+    for t in ax.texts:  # beside its point: to its right, and above it by a few lines at most
+        point = ax.transData.transform(t.xy)
+        box = t.get_window_extent()
+        assert box.x0 >= point[0] and 0.0 <= box.y0 - point[1] <= 5 * t.get_fontsize()
+
+
 # -- the command line: bad input (no simulation) -----------------------------------------------
 
 

@@ -780,6 +780,20 @@ def _knob_changes(setting: Any, reference: Any) -> str:
     return ", ".join(changed) or "reference"
 
 
+def _labels_apart(ax: Axes, labels: Sequence[Any]) -> None:
+    """Moves each annotation up, in turn, until its box overlaps none of those before it
+    (points whose costs and errors nearly coincide would otherwise print their labels over
+    each other)."""
+    placed: list[Any] = []
+    for label in labels:
+        box = label.get_window_extent()  # in display units, by the figure's renderer
+        while any(box.overlaps(other) for other in placed):
+            dx, dy = label.xyann
+            label.xyann = (dx, dy + 0.8 * label.get_fontsize())  # points, a line at a time
+            box = label.get_window_extent()
+        placed.append(box)
+
+
 def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = "wall_s",
                   ax: Axes | None = None, title: str | None = None,
                   annotate: bool = True) -> Figure:
@@ -830,17 +844,18 @@ def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = 
     ref = next((p for p in points if p.reference), None)
     if ref is not None:
         ax.plot([ref.cost], [0.0], "*", ms=14, color="tab:orange", label="reference")
-    if annotate:
-        reference = result.reference
-        for p in points:
-            ax.annotate(_knob_changes(p.setting, reference), (p.cost, 100.0 * p.error),
-                        xytext=(5, 4), textcoords="offset points", fontsize="x-small")
     ax.set_xscale("log")
     plain = FuncFormatter(lambda value, _: f"{value:g}")
     ax.xaxis.set_major_formatter(plain)
     # within about a decade the log axis has no major tick: label the minor ones plainly
     ax.xaxis.set_minor_formatter(plain if x.max() < 30.0 * x.min() else NullFormatter())
     ax.set_ylim(bottom=0.0)
+    if annotate:
+        reference = result.reference
+        _labels_apart(ax, [ax.annotate(_knob_changes(p.setting, reference),
+                                       (p.cost, 100.0 * p.error), xytext=(5, 4),
+                                       textcoords="offset points", fontsize="x-small")
+                           for p in sorted(points, key=lambda p: (p.error, p.cost))])
     ax.set_xlabel(_COST_NAMES.get(cost, cost))
     ax.set_ylabel(f"|error| of the {_QUANTITY_NAMES.get(quantity, quantity)} (%)")
     _set_title(ax, title, f"Error against run time: {_QUANTITY_NAMES.get(quantity, quantity)}",
