@@ -207,9 +207,10 @@ class ScaleBias:
 #: The bias of each scale, per case, that the paper-scale studies measured (the committed
 #: studies data/study-paper-balls for balls-MS and data/study-paper-ldms for LDMS #1 and #4;
 #: ``millscope report <study>`` remakes their tables, and a test checks these figures against
-#: them). ``SCALE_BIAS[scale][case]``; a scale or case not listed was not measured. The energy
-#: bias comes from the softened contacts (the slice at the paper's stiffness reads the whole
-#: drum's energy within its noise, balls-MS).
+#: them). ``SCALE_BIAS[scale][case]``; a scale or case not listed was not measured. Most of
+#: the energy bias comes from the softened contacts; the slice adds to it at LDMS (at the
+#: paper's stiffness it reads 38 % and 46 % less energy at LDMS #1 and #4, and the whole
+#: drum's within its noise for balls-MS).
 SCALE_BIAS: Mapping[str, Mapping[str, ScaleBias]] = MappingProxyType({
     "tiny": MappingProxyType({
         "balls-MS": ScaleBias("balls-MS", 3, -0.060, 0.015, -0.851, 0.096),
