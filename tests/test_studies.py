@@ -387,7 +387,7 @@ def test_the_figure_keeps_the_labels_of_close_points_apart() -> None:
     for t in ax.texts:  # beside its point: to its right, and above it by a few lines at most
         point = ax.transData.transform(t.xy)
         box = t.get_window_extent()
-        assert box.x0 >= point[0] and 0.0 <= box.y0 - point[1] <= 5 * t.get_fontsize()
+        assert box.x0 >= point[0] and 0.0 <= box.y0 - point[1] <= 5 * float(t.get_fontsize())
 
 
 # -- the command line: bad input (no simulation) -----------------------------------------------

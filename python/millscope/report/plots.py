@@ -27,7 +27,9 @@ from matplotlib.collections import EllipseCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
+from matplotlib.text import Annotation
 from matplotlib.ticker import FuncFormatter, NullFormatter
+from matplotlib.transforms import Bbox
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _checks
@@ -780,16 +782,16 @@ def _knob_changes(setting: Any, reference: Any) -> str:
     return ", ".join(changed) or "reference"
 
 
-def _labels_apart(ax: Axes, labels: Sequence[Any]) -> None:
+def _labels_apart(labels: Sequence[Annotation]) -> None:
     """Moves each annotation up, in turn, until its box overlaps none of those before it
     (points whose costs and errors nearly coincide would otherwise print their labels over
     each other)."""
-    placed: list[Any] = []
+    placed: list[Bbox] = []
     for label in labels:
         box = label.get_window_extent()  # in display units, by the figure's renderer
         while any(box.overlaps(other) for other in placed):
             dx, dy = label.xyann
-            label.xyann = (dx, dy + 0.8 * label.get_fontsize())  # points, a line at a time
+            label.xyann = (dx, dy + 0.8 * float(label.get_fontsize()))  # points: a line
             box = label.get_window_extent()
         placed.append(box)
 
@@ -852,7 +854,7 @@ def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = 
     ax.set_ylim(bottom=0.0)
     if annotate:
         reference = result.reference
-        _labels_apart(ax, [ax.annotate(_knob_changes(p.setting, reference),
+        _labels_apart([ax.annotate(_knob_changes(p.setting, reference),
                                        (p.cost, 100.0 * p.error), xytext=(5, 4),
                                        textcoords="offset points", fontsize="x-small")
                            for p in sorted(points, key=lambda p: (p.error, p.cost))])
