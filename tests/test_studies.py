@@ -377,6 +377,7 @@ def test_the_figure_keeps_the_labels_of_close_points_apart() -> None:
     2.5 s block): their labels' boxes do not overlap, and each stays beside its point."""
     table = _table([(100.0, 0.0), (50.0, 0.012), (51.0, 0.016), (52.0, 0.014), (1.0, 0.2)])
     fig = plots.plot_accuracy(table, "energy")
+    fig.draw_without_rendering()  # laid out as a saved figure is
     ax = fig.axes[0]
     boxes = [t.get_window_extent() for t in ax.texts]
     assert len(boxes) == 5

@@ -852,18 +852,19 @@ def plot_accuracy(result: StudyResult, quantity: str = "energy", *, cost: str = 
     # within about a decade the log axis has no major tick: label the minor ones plainly
     ax.xaxis.set_minor_formatter(plain if x.max() < 30.0 * x.min() else NullFormatter())
     ax.set_ylim(bottom=0.0)
-    if annotate:
-        reference = result.reference
-        _labels_apart([ax.annotate(_knob_changes(p.setting, reference),
-                                       (p.cost, 100.0 * p.error), xytext=(5, 4),
-                                       textcoords="offset points", fontsize="x-small")
-                           for p in sorted(points, key=lambda p: (p.error, p.cost))])
+    reference = result.reference
+    labels = [ax.annotate(_knob_changes(p.setting, reference), (p.cost, 100.0 * p.error),
+                          xytext=(5, 4), textcoords="offset points", fontsize="x-small")
+              for p in sorted(points, key=lambda p: (p.error, p.cost))] if annotate else []
     ax.set_xlabel(_COST_NAMES.get(cost, cost))
     ax.set_ylabel(f"|error| of the {_QUANTITY_NAMES.get(quantity, quantity)} (%)")
     _set_title(ax, title, f"Error against run time: {_QUANTITY_NAMES.get(quantity, quantity)}",
                made)
     _grid(ax)
     ax.legend(fontsize="small")
+    if labels:  # where the points land once the figure is laid out, as it will be drawn
+        fig.draw_without_rendering()
+        _labels_apart(labels)
     return fig
 
 
