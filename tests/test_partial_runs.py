@@ -18,6 +18,7 @@ import pytest
 
 import millscope as ms
 from millscope.campaign import Case, RunSettings, run_case, runs
+from millscope.campaign.cases import distinct_runs
 from millscope.campaign.executors import simulate_case
 from millscope.campaign.partial import (
     PARTIAL_DIR,
@@ -197,6 +198,28 @@ def test_a_campaign_runs_two_sampling_twins_once(tmp_path: Path, reference: dict
     infos = [r.record.meta["campaign"] for r in results if r.record is not None]
     assert infos[0]["pid"] == infos[1]["pid"]
     assert infos[0]["wall_time_s"] == infos[1]["wall_time_s"]
+
+
+def test_twins_from_one_run_cost_one_run_of_the_engines_particle_steps(tmp_path: Path) -> None:
+    """distinct_runs keeps one of two twins one run stored and both of twins run apart (other
+    wall times); a case's particle-steps are its particles x the steps the engine took to
+    settle and rotate; its core-hours are wall time x threads."""
+    cases = [tiny_case("instant"), tiny_case("mean")]
+    results = ms.Campaign(cases, tmp_path / "store", block=None).run(max_workers=1,
+                                                                     progress=False)
+    assert [r.hash for r in distinct_runs(results)] == [results[0].hash]
+    apart = dataclasses.replace(results[1], wall_time_s=results[1].wall_time_s + 1.0)
+    assert [r.hash for r in distinct_runs([results[0], apart])] == [r.hash for r in results]
+    sim = cases[0].simulation()
+    sim.settle(progress=False)
+    sim.run(QUICK.duration_s, QUICK.sample_dt, "instant", progress=False)
+    steps = sim._engine.step_count  # every step since the fill
+    assert steps > QUICK.duration_s / sim.dt  # settling took steps too
+    for r in results:
+        assert r.particle_steps == r.scene.n_particles * steps
+    doubled = dataclasses.replace(results[0], case=Case(cases[0].scene,
+                                                        QUICK.replace(threads=2)))
+    assert doubled.core_hours == pytest.approx(2 * results[0].wall_time_s / 3600.0, rel=1e-15)
 
 
 def test_a_twin_whose_run_brings_no_other_mode_is_failed_not_lost(tmp_path: Path) -> None:

@@ -89,6 +89,33 @@ def test_fig_9_quotes_each_groups_torque_change_beside_the_papers(store, report)
             "paper's Fig. 9: under 9 %).") in report.read_text()
 
 
+def test_the_cost_table_counts_each_groups_runs_and_core_hours(store, report) -> None:
+    """Per group of the store's done cases (counted here from its manifest): the runs, their
+    levels, and the sum of wall time x threads in hours; the failed case costs nothing there.
+    The synthetic records give no time step, so no particle-steps."""
+    entries = read_manifest(store)["cases"]
+    results = {r.hash: r for r in ms.Campaign.from_store(store).results()}
+    groups: dict[str, list[tuple[float, float]]] = {}
+    for entry in entries:
+        if entry["status"] != "done":
+            continue
+        r = results[entry["hash"]]
+        groups.setdefault(case_key(r.scene).group, []).append(
+            (entry["wall_time_s"] * r.case.settings.threads / 3600.0,
+             case_key(r.scene).load_level))
+    text = report.read_text()
+    table = text[text.index("## Cost"):text.index("## Cases")]
+    rows = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
+            for line in table.splitlines() if line.startswith("| ") and "---" not in line}
+    assert set(rows) == {"group", *groups, "all"}
+    for name, members in groups.items():
+        levels = sorted({lv for _, lv in members if lv is not None})
+        assert rows[name][:4] == [", ".join(f"{lv:g}" for lv in levels) or "-",
+                                  str(len(members)), "-",
+                                  f"{sum(h for h, _ in members):.3g}"]
+    assert rows["all"][1] == str(sum(len(m) for m in groups.values())) == "14"
+
+
 def test_each_group_with_3_levels_gets_its_calibration(store, report) -> None:
     results = ms.Campaign.from_store(store).results()
     path = report.parent / "calibration_LDMS.json"

@@ -31,7 +31,9 @@ __all__ = [
     "CaseResult",
     "RunSettings",
     "case_matrix",
+    "distinct_runs",
     "paper_matrix",
+    "run_particle_steps",
 ]
 
 CASE_FORMAT = "millscope-case-1"  # part of every case hash: bump it when results change meaning
@@ -397,3 +399,58 @@ class CaseResult:
     def ok(self) -> bool:
         """True when the case is done."""
         return self.status == "done"
+
+    @property
+    def particle_steps(self) -> float:
+        """Particles x time steps the case's run took (:func:`run_particle_steps`); nan
+        unless done."""
+        if self.record is None:
+            return math.nan
+        return run_particle_steps(self.record, self.scene.n_particles,
+                                  self.case.settings.duration_s)
+
+    @property
+    def core_hours(self) -> float:
+        """Wall time x engine threads of the case's run, h: the cores the run held, including
+        any time other work on a shared machine took from it; nan when the wall time is not
+        known."""
+        return self.wall_time_s * self.case.settings.threads / 3600.0
+
+
+def run_particle_steps(record: TorqueRecord, n_particles: int, duration_s: float) -> float:
+    """Particles x time steps of a run: its settling (``record.meta["settle"]["time_s"]``, 0
+    when the record has none) and ``duration_s`` s of rotation, at the record's time step
+    ``record.meta["dt"]`` (s). The engine's work grows with it on every machine.
+
+    Returns nan when the record does not give a time step > 0.
+    """
+    dt = record.meta.get("dt")
+    if not isinstance(dt, (int, float)) or not math.isfinite(dt) or dt <= 0:
+        return math.nan
+    settle = record.meta.get("settle")
+    settle_s = settle.get("time_s", 0.0) if isinstance(settle, Mapping) else 0.0
+    if not isinstance(settle_s, (int, float)) or not math.isfinite(settle_s):
+        settle_s = 0.0
+    return float(n_particles * (round(settle_s / dt) + round(duration_s / dt)))
+
+
+def distinct_runs(results: Iterable[CaseResult]) -> list[CaseResult]:
+    """The done results, one per run of the engine.
+
+    A run samples both modes from the same steps, and a campaign holding a case and its twin
+    in the other sampling mode stores both from one run, with that run's wall time. A done
+    result whose twin (the same case but for ``settings.sampling``) came before it with the
+    same wall time is that run's second record and is left out; twins run apart (their wall
+    times differ) count twice.
+    """
+    seen: set[tuple[str, float]] = set()
+    runs = []
+    for r in results:
+        if not r.ok:
+            continue
+        run = (Case(r.scene, r.case.settings.replace(sampling="instant")).hash(), r.wall_time_s)
+        if math.isfinite(r.wall_time_s) and run in seen:
+            continue
+        seen.add(run)
+        runs.append(r)
+    return runs

@@ -58,7 +58,7 @@ from typing import Any
 from .. import _checks
 from .._files import MAX_JSON_BYTES, atomic_write, read_json
 from ..signal.analysis import AnalysisSettings
-from .cases import CaseResult
+from .cases import CaseResult, run_particle_steps
 from .runs import Campaign
 from .study_plans import KNOBS, QUANTITIES, Setting, StudyPlan
 from .study_results import QuantityError, SettingSummary, StudyResult, StudyRow, StudyRun
@@ -109,14 +109,12 @@ def _run_of(plan: StudyPlan, index: int, result: CaseResult) -> StudyRun:
     # intervals), so the campaign's block [warm-up, duration) holds one sample fewer than
     # the record: energies are compared per the block length actually analysed.
     block_s = result.record.block(*analysis.block).duration_s
-    dt = result.record.meta["dt"]
-    settle = round(float((result.record.meta.get("settle") or {}).get("time_s", 0.0)) / dt)
-    steps = settle + round(case.settings.duration_s / dt)
-    ran = settle + round(result.case.settings.duration_s / dt)
     n = case.scene.n_particles
+    steps = run_particle_steps(result.record, n, case.settings.duration_s)
+    ran = result.particle_steps  # the donor's run, when it is longer
     return StudyRun(setting=k, load_level=level, seed=seed, hash=result.hash,
                     wall_s=float(result.wall_time_s) * steps / ran,
-                    particle_steps=float(n * steps), n_particles=n, dt_s=float(dt),
+                    particle_steps=steps, n_particles=n, dt_s=float(result.record.meta["dt"]),
                     length_m=case.scene.drum.length, block_s=block_s,
                     mean_torque=analysed.mean_torque, lth_amplitude=analysed.lth_amplitude,
                     energy=analysed.energy, derived=result.case != case)
