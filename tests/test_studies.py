@@ -100,7 +100,7 @@ def test_the_reference_is_the_most_expensive_setting_unless_named() -> None:
     assert costs[1] == max(costs)
     # particles x rotation steps: 391 balls of the tiny slice, (0.5 + 1) s at 0.05 T_R
     t_rayleigh = plan.scene(plan.reference, 1).min_rayleigh_time()[0]
-    assert costs[1] == pytest.approx(391 * 1.5 / (0.05 * t_rayleigh))
+    assert costs[1] == 391 * round(1.5 / (0.05 * t_rayleigh))
     # equal cost: the anti-aliased sampling is the reference
     tie = StudyPlan.ladder("sampling", ["instant", "mean"], base=SHORT)
     assert tie.reference.sampling == "mean"

@@ -407,6 +407,11 @@ def cmd_campaign(args: argparse.Namespace) -> int:
     from .case_files import load_campaign, run_campaign
 
     plan = load_campaign(args.file)
+    if args.cost:
+        from ..campaign.costs import campaign_cost
+
+        print(campaign_cost(plan.campaign, plan.reuse, retry_failed=plan.retry_failed))
+        return 0
     code = _resumable(lambda: run_campaign(plan, progress=not args.no_progress),
                       plan.campaign.store, "cases")
     return EXIT_INTERRUPTED if code is None else code
@@ -616,6 +621,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "with one error line and exit code 2. See examples/*.toml.")
     p.add_argument("file", help="campaign file (TOML)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--cost", action="store_true",
+                   help="run nothing: print what the store holds and what is left to run, "
+                        "per group, in particle-steps and in core-hours at the pace of the "
+                        "store's finished runs")
     p.set_defaults(func=cmd_campaign)
 
     p = sub.add_parser("advise", help="stiffness advice: contact times against dt and the "

@@ -5,7 +5,8 @@
 :mod:`~millscope.campaign.executors` (the worker side and the wait on any executor),
 :mod:`~millscope.campaign.runs` (:class:`Campaign`, which runs cases into a store, and
 :func:`read_store`, a store as one table), :mod:`~millscope.campaign.tables` (the results as a
-pandas DataFrame) and the study of error against run time:
+pandas DataFrame), :mod:`~millscope.campaign.costs` (what a campaign has left to run, and its
+cost) and the study of error against run time:
 :mod:`~millscope.campaign.study_plans` (settings, plans),
 :mod:`~millscope.campaign.study_results` (rows, tables, CSV, Markdown) and
 :mod:`~millscope.campaign.studies` (:func:`run_study`, and every name of the study). Imports

@@ -33,6 +33,7 @@ __all__ = [
     "case_matrix",
     "distinct_runs",
     "paper_matrix",
+    "rotation_particle_steps",
     "run_particle_steps",
 ]
 
@@ -432,6 +433,16 @@ def run_particle_steps(record: TorqueRecord, n_particles: int, duration_s: float
     if not isinstance(settle_s, (int, float)) or not math.isfinite(settle_s):
         settle_s = 0.0
     return float(n_particles * (round(settle_s / dt) + round(duration_s / dt)))
+
+
+def rotation_particle_steps(case: Case) -> float:
+    """Particles x time steps of the case's rotation (warm-up and block) at its time step (the
+    engine's default when its settings give none): what a run of it will take but for the
+    settling, which only the run tells."""
+    dt = case.settings.dt
+    if dt is None:
+        dt = time_step_limit(case.scene).default_dt()
+    return float(case.scene.n_particles * round(case.settings.duration_s / dt))
 
 
 def distinct_runs(results: Iterable[CaseResult]) -> list[CaseResult]:

@@ -490,16 +490,7 @@ class Campaign:
             executor = pool
         futures: dict[Any, int] = {}
         done_before = sum(1 for d in self._hashes if entries[d]["status"] == "done")
-        # A case whose twin also runs is stored from the twin's run (the engine samples both
-        # modes at once): carries[k] is the twin that case k's run stores as well.
-        carries: dict[int, int] = {}
-        waiting = set(todo)
-        for k in todo:
-            twin = self._twins.get(k)
-            if twin is not None and twin in waiting and k in waiting:
-                carries[k] = twin
-                waiting.discard(twin)
-        todo = [k for k in todo if k in waiting]
+        todo, carries = self._runs_of(todo)
         try:
             with _bar(progress, len(self._cases), done_before) as bar:
                 partial = (None if checkpoint_every_s is None
@@ -543,6 +534,19 @@ class Campaign:
             # From the files, not from ``entries``: a Ctrl-C between storing a case and
             # booking it would otherwise leave the manifest a case behind the store.
             _write_manifest(self._store, self._entries(_scan(self._store)), self._analysis)
+
+    def _runs_of(self, todo: list[int]) -> tuple[list[int], dict[int, int]]:
+        """The cases of ``todo`` that run, and ``carries[k]``: the twin that case k's run
+        stores as well. A case whose twin also runs is stored from the twin's run (the engine
+        samples both modes at once)."""
+        carries: dict[int, int] = {}
+        waiting = set(todo)
+        for k in todo:
+            twin = self._twins.get(k)
+            if twin is not None and twin in waiting and k in waiting:
+                carries[k] = twin
+                waiting.discard(twin)
+        return [k for k in todo if k in waiting], carries
 
     def _bar_note(self, running: list[int], entries: Mapping[str, Mapping[str, Any]],
                   partial: str | None) -> str:

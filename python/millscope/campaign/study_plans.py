@@ -21,7 +21,7 @@ from ..model.presets import LOAD_LEVELS, PARTICLE_KINDS, SCALES, pilot_mill
 from ..model.scene import Scene
 from ..signal.analysis import WINDOWS
 from ..signal.spectral import LTH_CLEAR_BINS, WindowName, lifter_harmonic_hz
-from .cases import MAX_DURATION_S, SAMPLINGS, Case, RunSettings
+from .cases import MAX_DURATION_S, SAMPLINGS, Case, RunSettings, rotation_particle_steps
 
 __all__ = ["COSTS", "KNOBS", "LEVEL_QUANTITIES", "QUANTITIES", "Setting", "StudyPlan"]
 
@@ -411,10 +411,7 @@ class StudyPlan:
     def case_particle_steps(self, index: int) -> float:
         """Particles x time steps of the rotation (warm-up and block) case ``index`` of
         :meth:`cases` runs; settling is not counted."""
-        case = self._cases[index][3]
-        dt = case.settings.dt
-        assert dt is not None  # set for every case of a study
-        return case.scene.n_particles * case.settings.duration_s / dt
+        return rotation_particle_steps(self._cases[index][3])
 
     # -- ladders -------------------------------------------------------------------------------
     @classmethod
