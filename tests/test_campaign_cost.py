@@ -33,7 +33,7 @@ def test_before_a_run_one_twin_runs_and_its_steps_are_the_engines(tmp_path: Path
     groups = cost.by_group()
     assert list(groups["runs_left"]) == [1, 1] and list(groups["done"]) == [0, 0]
     assert math.isnan(groups["core_hours_left"].iloc[0])
-    assert "No core-hours" in str(cost)
+    assert "has no core-hours" in str(cost)
     assert not (tmp_path / "store").exists()  # nothing written
 
 
@@ -58,7 +58,13 @@ def test_after_the_run_the_pace_is_the_stores(tmp_path: Path) -> None:
     wall = [c["wall_time_s"] for c in read_manifest(camp.store)["cases"]]
     assert wall[0] == wall[1] and cost.measured_runs == 1
     assert cost.pace == pytest.approx(results[0].particle_steps / wall[0], rel=1e-12)
-    assert cost.by_group()["core_hours_left"].iloc[0] == 0.0
+    groups = cost.by_group()
+    assert groups["core_hours_left"].iloc[0] == 0.0
+    # the run is counted once, with its particle-steps and its wall time in hours
+    assert list(cost.cases["run"]) == [True, False]
+    assert groups["runs_done"].iloc[0] == 1
+    assert groups["particle_steps_done"].iloc[0] == results[0].particle_steps
+    assert groups["core_hours_done"].iloc[0] == pytest.approx(wall[0] / 3600.0, rel=1e-15)
 
     # a campaign reusing that store has nothing left to run
     other = both_modes(tmp_path / "other")
@@ -104,6 +110,8 @@ def test_the_cli_prints_the_cost_and_runs_nothing(tmp_path: Path, monkeypatch, c
         'scale = "tiny"\n\n'
         '[settings]\nduration_s = 0.3\nwarm_up_s = 0.1\nsampling = ["instant", "mean"]\n')
     assert main(["campaign", "spec.toml", "--cost"]) == 0
-    rows = [line.split() for line in capsys.readouterr().out.splitlines()]
-    assert rows[0][0] == "group" and rows[1][:5] == ["LDMS", "1,2", "8", "0", "4"]
+    rows = [[c.strip() for c in line.split("|")[1:-1]]
+            for line in capsys.readouterr().out.splitlines() if line.startswith("| ")]
+    assert rows[0][0] == "group" and rows[1][:4] == ["LDMS", "1,2", "8", "0"]
+    assert rows[1][7] == "4"  # runs left: each of the 4 runs stores its twin
     assert not (tmp_path / "store").exists()

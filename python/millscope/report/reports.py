@@ -5,8 +5,8 @@ it (:func:`~millscope.campaign_analysis.analyze_campaign`) and writes into one f
 
 * ``report.md``: the campaign at a glance, the Table 6 analogue (log fits with bootstrap
   intervals), a table per group (per level: mean torque, LTH, energy per unit with its interval),
-  the cost of the runs per group (particle-steps and core-hours), a table of every case, and
-  the figures below;
+  the cost of the runs per group, done and left (:func:`~millscope.campaign.costs.campaign_cost`),
+  a table of every case, and the figures below;
 * ``fig09_torque.png`` (average torque per unit against filling), ``fig10_spectra_<group>.png``
   (the spectra of a group with the LTH marked), ``fig11_lth.png`` (LTH amplitude against
   filling), ``fig12_waterfall_<group>.png`` (Figs. 12-13, a waterfall per group),
@@ -37,7 +37,8 @@ from .._files import atomic_write
 from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from ..calibration.discrimination import discrimination
 from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
-from ..campaign.cases import CaseResult, distinct_runs
+from ..campaign.cases import CaseResult
+from ..campaign.costs import campaign_cost
 from ..campaign.runs import Campaign
 from ..campaign.store import UnreadableCase, _listing, unreadable_cases
 from ..campaign.studies import StudyResult
@@ -216,40 +217,6 @@ def _case_table(results: list[CaseResult]) -> list[str]:
     return rows
 
 
-def _cost_table(results: list[CaseResult]) -> list[str]:
-    """The cost of the store's runs per group of cases (:class:`~millscope.presets.CaseKey`'s
-    group, both sampling modes together, since one run gives both) and in all."""
-    runs = distinct_runs(results)
-    by_group: dict[str, list[CaseResult]] = {}
-    for r in runs:
-        by_group.setdefault(case_key(r.scene).group, []).append(r)
-    rows = ["| group | load levels | runs | particle-steps | core-hours | core-hours per run |",
-            "|---|---|---|---|---|---|"]
-
-    def row(name: str, members: list[CaseResult]) -> str:
-        levels = sorted({lv for r in members
-                         if (lv := case_key(r.scene).load_level) is not None})
-        hours = [h for r in members if math.isfinite(h := r.core_hours)]
-        spread = (f"{min(hours):.2g}-{max(hours):.2g}" if len(hours) > 1
-                  else f"{hours[0]:.2g}" if hours else "-")
-        unknown = len(members) - len(hours)
-        total = f"{math.fsum(hours):.3g}" if hours else "-"
-        steps = [p for r in members if math.isfinite(p := r.particle_steps)]
-        return (f"| {name} | {', '.join(f'{lv:g}' for lv in levels) or '-'} | {len(members)} | "
-                f"{f'{math.fsum(steps):.3g}' if steps else '-'} | "
-                f"{total}{f' ({unknown} without a wall time)' if unknown else ''} | {spread} |")
-
-    rows += [row(name, members) for name, members in sorted(by_group.items())]
-    if len(by_group) > 1:
-        rows.append(row("all", runs))
-    return rows + [
-        "", "A run samples both modes from the same steps: a case and its twin in the other "
-        "sampling mode that one run stored count once. Particle-steps: the particles x the time "
-        "steps of settling and rotation, which the engine's work follows on every machine. "
-        "Core-hours: each run's wall time x its engine threads, the cores it held, including "
-        "any time other work on a shared machine took from it."]
-
-
 def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | None = None, *,
                  progress: bool = True, block: tuple[float, float] | None = None,
                  bootstrap: int = 1000, confidence: float = 0.95, seed: int = 0,
@@ -388,7 +355,7 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
         for fig in written:
             lines += [f"### {fig.heading}", "", fig.caption, "", f"![{fig.heading}]({fig.file})",
                       ""]
-    lines += ["## Cost", ""] + _cost_table(results) + [""]
+    lines += ["## Cost", "", campaign_cost(campaign, results=results).to_markdown(), ""]
     lines += ["## Cases", ""] + _case_table(results) + [""]
     failed = [r for r in results if r.status == "failed"]
     if failed:
