@@ -214,6 +214,32 @@ def test_level_plots_draw_each_group_in_level_order() -> None:
         plots.plot_torque_levels({"x": (levels, torque, np.zeros((2, 3)))})
 
 
+def test_the_lth_plot_opens_the_markers_of_levels_whose_lth_is_noise() -> None:
+    """Fig. 11: the levels whose LTH does not stand out get an open marker over the group's
+    point, in its colour and shape; the legend says what an open marker means."""
+    levels = np.array([1.0, 2.0, 3.0, 4.0])
+    amplitude = np.array([17.0, 15.0, 12.0, 8.0])
+    distinct = np.array([False, True, False, True])
+    (ax,) = plots.plot_lth_levels({"instant": (levels, amplitude, distinct),
+                                   "mean": (levels, 0.6 * amplitude)}).axes
+    (open_marks,) = [line for line in ax.lines if line.get_label() == "_instant"]
+    x, y = open_marks.get_data()
+    np.testing.assert_array_equal(x, levels[~distinct])
+    np.testing.assert_array_equal(y, amplitude[~distinct])
+    group = ax.containers[0].lines[0]
+    assert open_marks.get_markerfacecolor() == "white"
+    assert open_marks.get_markeredgecolor() == group.get_color()
+    assert open_marks.get_marker() == group.get_marker()
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        "instant", "mean", "open: not above the noise"]
+    # every LTH distinct: no open marker, no legend note
+    (ax,) = plots.plot_lth_levels({"mean": (levels, amplitude, np.ones(4, bool))}).axes
+    assert not [line for line in ax.lines if line.get_label().startswith("_mean")]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["mean"]
+    with pytest.raises(ValueError, match=r"groups\['x'\]: distinct must be one bool per level"):
+        plots.plot_lth_levels({"x": (levels, amplitude, [1, 0, 1, 0])})
+
+
 def test_torque_level_plot_shows_a_small_change_at_its_true_scale() -> None:
     """Fig. 9: torques within 0.4 % of each other. The y axis runs from 0.9 per unit (or
     below the smallest value) to above 1, so the change takes a few per cent of the height

@@ -25,7 +25,9 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.collections import EllipseCollection
 from matplotlib.colors import Normalize
+from matplotlib.container import ErrorbarContainer
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon
 from matplotlib.text import Annotation
 from matplotlib.ticker import FuncFormatter, NullFormatter
@@ -578,25 +580,62 @@ def plot_torque_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,
     return fig
 
 
-def plot_lth_levels(groups: Mapping[str, tuple[ArrayLike, ArrayLike]], *,
+def plot_lth_levels(groups: Mapping[str, tuple[ArrayLike, ...]], *,
                     ax: Axes | None = None, title: str | None = None) -> Figure:
     """Amplitude of the lifter torque harmonic against load level (paper Fig. 11).
 
+    A level whose LTH does not stand out of the noise (:attr:`millscope.Peak.distinct`) gets
+    an open marker: what was located there is a noise peak, and its amplitude says little
+    about the lifters.
+
     Parameters
     ----------
-    groups : mapping of str to (levels, amplitude)
-        Per group: load levels and LTH amplitudes, N m.
+    groups : mapping of str to (levels, amplitude) or (levels, amplitude, distinct)
+        Per group: load levels, LTH amplitudes, N m, and optionally per level whether the LTH
+        stands out of the noise (bools; left out: all do).
     ax : Axes, optional
     title : str, optional
 
     Returns
     -------
     Figure
-        One errorbar container per group.
+        One errorbar container per group; the open markers are one more line per group
+        that has them, labelled ``"_"`` + the group's name.
+
+    Raises
+    ------
+    ValueError
+        for an empty mapping, or levels, values and ``distinct`` that do not pair up.
     """
-    return _plot_against_level(groups, ylabel="LTH amplitude (N m)",
-                               title=title or "Lifter torque harmonic against filling level",
-                               ax=ax, intervals=False)
+    masks: dict[str, NDArray[np.bool_]] = {}
+    for name, entry in groups.items():
+        if isinstance(entry, tuple) and len(entry) == 3:
+            mask = np.asarray(entry[2])
+            if mask.dtype != np.bool_ or mask.shape != np.shape(entry[0]):
+                raise ValueError(f"groups[{name!r}]: distinct must be one bool per level "
+                                 f"({np.size(entry[0])}), not {entry[2]!r}")
+            masks[name] = ~mask
+    fig = _plot_against_level({name: (entry[0], entry[1]) for name, entry in groups.items()},
+                              ylabel="LTH amplitude (N m)",
+                              title=title or "Lifter torque harmonic against filling level",
+                              ax=ax, intervals=False)
+    axes = ax if ax is not None else fig.axes[0]
+    lines = {c.get_label(): c.lines[0] for c in axes.containers
+             if isinstance(c, ErrorbarContainer)}
+    for name, noise in masks.items():
+        if not noise.any():
+            continue
+        x = np.asarray(groups[name][0], dtype=np.float64)[noise]
+        y = np.asarray(groups[name][1], dtype=np.float64)[noise]
+        axes.plot(x, y, linestyle="none", marker=lines[name].get_marker(), ms=6, mfc="white",
+                  mec=lines[name].get_color(), zorder=3, label=f"_{name}")
+    if any(noise.any() for noise in masks.values()):
+        handles, labels = axes.get_legend_handles_labels()
+        handles.append(Line2D([], [], linestyle="none", marker="o", ms=6, mfc="white",
+                              mec=_LINE_COLOR))
+        labels.append("open: not above the noise")
+        axes.legend(handles, labels, fontsize="small")
+    return fig
 
 
 def plot_energy_levels(groups: Mapping[str, GroupSeries], *, ax: Axes | None = None,

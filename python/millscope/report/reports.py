@@ -29,7 +29,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 from matplotlib.figure import Figure
+from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from .. import _core
@@ -127,6 +129,12 @@ def _torque_changes(groups: list[GroupAnalysis]) -> str:
             + f" (the paper's Fig. 9: under {100 * plots.PAPER_TORQUE_CHANGE:g} %).")
 
 
+def _lth_distinct(g: GroupAnalysis) -> NDArray[np.bool_]:
+    """Per level of the group: whether its LTH stands out of the noise in every case."""
+    noise = {case_key(r.scene).load_level for r in g.results if r.ok and not r.lth_distinct}
+    return np.array([level not in noise for level in g.levels], dtype=bool)
+
+
 def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
     figs = [_Figure("fig09_torque.png", "Fig. 9: average torque",
                     "Mean torque over the block per unit of each group's largest, against the "
@@ -146,10 +154,13 @@ def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
                             "Amplitude spectra of the block (lowest seed of each level), the "
                             "located LTH marked.", grid))
     figs.append(_Figure("fig11_lth.png", "Fig. 11: lifter torque harmonic",
-                        "Amplitude of the LTH located in each block against the load level.",
+                        "Amplitude of the LTH located in each block against the load level "
+                        "(the mean over a level's repeats). An open marker: at that level the "
+                        "LTH does not stand out of the noise in some case, so what was located "
+                        "is a noise peak.",
                         lambda: plots.plot_lth_levels(
-                            {g.name: (g.levels, g.lth_amplitude) for g in groups
-                             if g.lifters > 0})))
+                            {g.name: (g.levels, g.lth_amplitude, _lth_distinct(g))
+                             for g in groups if g.lifters > 0})))
     for g in groups:
         def waterfall(g: GroupAnalysis = g) -> Figure:
             spectra, labels, _, _ = _spectra(g)
