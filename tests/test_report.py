@@ -73,6 +73,13 @@ def test_the_report_holds_table_6_and_every_figure(store, report) -> None:
     assert "balls-MS" in text
 
 
+def test_table_6_is_followed_by_the_span_of_the_papers_six_fits(report) -> None:
+    """The paper's Table 6: a from -0.476 (HDHS) to -0.408 (LDMS), R² from 0.8982 (LDMS) to
+    0.9959 (HDMS)."""
+    assert ("The paper's six fits (its Table 6): a from -0.476 to -0.408, R² from 0.898 to "
+            "0.996.") in report.read_text()
+
+
 def test_fig_9_quotes_each_groups_torque_change_beside_the_papers(store, report) -> None:
     """Fig. 9's caption: (max - min) / max of each group's mean torques per level (computed
     here from the results, seed means per level), and the paper's bound of 9 %."""

@@ -46,6 +46,7 @@ from ..campaign.store import UnreadableCase, _listing, unreadable_cases
 from ..campaign.studies import StudyResult
 from ..model.presets import case_key
 from ..signal.spectral import PEAK_DISTINCT_RATIO, Spectrum, spectrum
+from ..signal.synthetic import PAPER_TABLE_6
 from . import plots
 
 __all__ = ["UnreadableCasesError", "calibration_file_name", "write_report", "write_study"]
@@ -127,6 +128,15 @@ def _torque_changes(groups: list[GroupAnalysis]) -> str:
         return ""
     return (" Largest change within a group, (max - min) / max: " + ", ".join(changes)
             + f" (the paper's Fig. 9: under {100 * plots.PAPER_TORQUE_CHANGE:g} %).")
+
+
+def _paper_range() -> str:
+    """The span of the paper's six fits, and which of our sampling modes they compare with."""
+    a = [fit[0] for fit in PAPER_TABLE_6.values()]
+    r2 = [fit[2] for fit in PAPER_TABLE_6.values()]
+    return (f"The paper's six fits (its Table 6): a from {min(a):g} to {max(a):g}, R² from "
+            f"{min(r2):.3g} to {max(r2):.3g}. The paper sampled the torque at instants 10 ms "
+            "apart, so its fits compare with the groups sampled that way (\"instant\").")
 
 
 def _lth_distinct(g: GroupAnalysis) -> NDArray[np.bool_]:
@@ -323,6 +333,8 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
             "## Table 6 analogue: log fits of energy against filling",
             "",
             table6_markdown(groups),
+            _paper_range(),
+            "",
             f"Intervals: {percent} percentile bootstrap, {bootstrap} replicates (seed {seed}). "
             "At a level with repeats (other seeds), the mean of its repeats is resampled from "
             "the relative seed-to-seed deviations pooled over all such levels of the group; at "
