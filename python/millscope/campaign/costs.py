@@ -186,7 +186,8 @@ def campaign_cost(campaign: Campaign, reuse: Iterable[str | os.PathLike[str]] = 
               if any(_case_path(src, results[k].hash).is_file() for src in sources)}
     runs, carries = campaign._runs_of([k for k in todo if k not in reused])
     twins = set(carries.values())
-    finished = {id(r) for r in distinct_runs(results)}
+    ran = distinct_runs(results)
+    finished = {id(r) for r in ran}
     rows = []
     for k, r in enumerate(results):
         key = case_key(r.scene)
@@ -212,8 +213,7 @@ def campaign_cost(campaign: Campaign, reuse: Iterable[str | os.PathLike[str]] = 
                      "run": (state == "done" and id(r) in finished) or state == "to run",
                      "particle_steps": steps, "core_hours": hours,
                      "particle_steps_left": steps * (1.0 - saved) if state == "to run" else 0.0})
-    measured = [r for r in results if id(r) in finished
-                and math.isfinite(r.particle_steps) and r.core_hours > 0]
+    measured = [r for r in ran if math.isfinite(r.particle_steps) and r.core_hours > 0]
     pace = (math.fsum(r.particle_steps for r in measured)
             / (3600.0 * math.fsum(r.core_hours for r in measured)) if measured else math.nan)
     return CampaignCost(campaign.store, pd.DataFrame(rows), pace, len(measured))
