@@ -54,17 +54,17 @@ def test_after_the_run_the_pace_is_the_stores(tmp_path: Path) -> None:
     cost = campaign_cost(camp)
     assert list(cost.cases["state"]) == ["done", "done"]
     assert float(cost.cases["particle_steps_left"].sum()) == 0.0
-    # one run made both cases: the pace is its particle-steps over its wall time
-    wall = [c["wall_time_s"] for c in read_manifest(camp.store)["cases"]]
-    assert wall[0] == wall[1] and cost.measured_runs == 1
-    assert cost.pace == pytest.approx(results[0].particle_steps / wall[0], rel=1e-12)
+    # one run made both cases: the pace is its particle-steps over its CPU time
+    cpu = [c["cpu_time_s"] for c in read_manifest(camp.store)["cases"]]
+    assert cpu[0] == cpu[1] > 0 and cost.measured_runs == 1
+    assert cost.pace == pytest.approx(results[0].particle_steps / cpu[0], rel=1e-12)
     groups = cost.by_group()
     assert groups["core_hours_left"].iloc[0] == 0.0
-    # the run is counted once, with its particle-steps and its wall time in hours
+    # the run is counted once, with its particle-steps and its CPU time in hours
     assert list(cost.cases["run"]) == [True, False]
     assert groups["runs_done"].iloc[0] == 1
     assert groups["particle_steps_done"].iloc[0] == results[0].particle_steps
-    assert groups["core_hours_done"].iloc[0] == pytest.approx(wall[0] / 3600.0, rel=1e-15)
+    assert groups["core_hours_done"].iloc[0] == pytest.approx(cpu[0] / 3600.0, rel=1e-15)
 
     # a campaign reusing that store has nothing left to run
     other = both_modes(tmp_path / "other")

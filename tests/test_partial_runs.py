@@ -9,6 +9,8 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import math
+import os
 import warnings
 from concurrent.futures import Future
 from pathlib import Path
@@ -23,6 +25,7 @@ from millscope.campaign.executors import simulate_case
 from millscope.campaign.partial import (
     PARTIAL_DIR,
     PartialFiles,
+    _CpuClock,
     _Progress,
     _save,
 )
@@ -42,7 +45,7 @@ def killed_after(case: Case, folder: Path, samples: int, extra: int = 0) -> Part
     s = case.settings
     sim = case.simulation()
     report = sim.settle(progress=False)
-    done = _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, report)
+    done = _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, 0.75, report)
     other = "mean" if s.sampling == "instant" else "instant"
     sim.run(samples * s.sample_dt, s.sample_dt, s.sampling, progress=False)
     done.extend([(sim.last_records[s.sampling], sim.last_records[other])])
@@ -98,10 +101,36 @@ def test_a_killed_case_goes_on_to_the_same_record(tmp_path: Path, reference: dic
         sim = case.simulation()
         report = sim.settle(progress=False)
         files = PartialFiles(tmp_path, case.hash())
-        _save(files, sim, _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, report))
+        _save(files, sim, _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, 0.75, report))
     outcome = run_case(case.to_dict(), str(tmp_path), checkpoint_every_s=1e9)
     assert_same_record(outcome, reference[sampling])
-    assert float(outcome["wall_time_s"]) > 1.5  # the time the killed run had spent counts
+    # the time the killed run had spent counts, wall and CPU; this run's CPU time is at most
+    # its wall time on every core of the machine
+    wall, cpu = float(outcome["wall_time_s"]) - 1.5, float(outcome["cpu_time_s"]) - 0.75
+    assert 0.0 < wall and 0.0 < cpu <= wall * (os.cpu_count() or 1)
+
+
+def read_samples_meta(files: PartialFiles) -> tuple[dict, dict]:
+    with np.load(files.samples) as z:
+        return json.loads(str(z["meta_json"][()])), {k: z[k] for k in ("time_s", "torque_Nm",
+                                                                        "other_Nm")}
+
+
+def test_a_checkpoint_without_cpu_time_goes_on_with_it_unknown(tmp_path: Path,
+                                                                reference: dict) -> None:
+    """An older version's checkpoint saved no CPU time: the case goes on to the same record,
+    its CPU time not known (None), and its cost falls back on wall time x threads."""
+    case = tiny_case()
+    files = killed_after(case, tmp_path, 9)
+    meta, arrays = read_samples_meta(files)
+    assert meta["cpu_time_s"] == 0.75
+    del meta["cpu_time_s"]
+    np.savez(files.samples, meta_json=np.array(json.dumps(meta)), **arrays)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # not set aside
+        outcome = run_case(case.to_dict(), str(tmp_path), checkpoint_every_s=1e9)
+    assert_same_record(outcome, reference["instant"])
+    assert outcome["cpu_time_s"] is None and float(outcome["wall_time_s"]) > 1.5
 
 
 def test_samples_past_the_checkpoint_are_dropped(tmp_path: Path, reference: dict) -> None:
@@ -119,7 +148,7 @@ def test_saving_at_every_segment_changes_nothing(tmp_path: Path, reference: dict
 
 
 @pytest.mark.parametrize("damage", ["checkpoint", "samples", "other_case", "too_long",
-                                    "no_checkpoint"])
+                                    "no_checkpoint", "cpu_time"])
 def test_unusable_files_are_set_aside(tmp_path: Path, reference: dict, damage: str) -> None:
     case = tiny_case()
     files = killed_after(case, tmp_path, 9)
@@ -141,6 +170,10 @@ def test_unusable_files_are_set_aside(tmp_path: Path, reference: dict, damage: s
             meta_json, t = z["meta_json"], z["time_s"]
         long = np.tile(t, 200)
         np.savez(files.samples, meta_json=meta_json, time_s=long, torque_Nm=long, other_Nm=long)
+    elif damage == "cpu_time":
+        meta, arrays = read_samples_meta(files)
+        meta["cpu_time_s"] = -1.0
+        np.savez(files.samples, meta_json=np.array(json.dumps(meta)), **arrays)
     else:
         files.checkpoint.unlink()
     with warnings.catch_warnings(record=True) as caught:
@@ -198,12 +231,37 @@ def test_a_campaign_runs_two_sampling_twins_once(tmp_path: Path, reference: dict
     infos = [r.record.meta["campaign"] for r in results if r.record is not None]
     assert infos[0]["pid"] == infos[1]["pid"]
     assert infos[0]["wall_time_s"] == infos[1]["wall_time_s"]
+    assert infos[0]["cpu_time_s"] == infos[1]["cpu_time_s"]
+    # the worker's CPU time: more than none, at most its wall time on every core
+    assert 0.0 < results[0].cpu_time_s <= results[0].wall_time_s * (os.cpu_count() or 1)
+    manifest = runs.read_manifest(tmp_path / "store")["cases"]
+    assert [e["cpu_time_s"] for e in manifest] == [r.cpu_time_s for r in results]
+
+
+def test_the_cpu_clock_of_cases_that_overlap_in_one_process_is_not_known() -> None:
+    """The process's CPU clock counts every thread: a case during which another ran in the same
+    process (threads of a dask worker) reads nan, a case alone its process's CPU time."""
+    with _CpuClock() as alone:
+        start = os.times()
+        sum(i * i for i in range(200_000))  # some CPU time
+        spent = alone.elapsed()
+        end = os.times()
+    ticks = 2 / os.sysconf("SC_CLK_TCK")  # os.times counts whole clock ticks
+    assert 0.0 < spent <= (end.user + end.system) - (start.user + start.system) + ticks
+    with _CpuClock() as first:
+        assert math.isfinite(first.elapsed())
+        with _CpuClock() as second:
+            assert math.isnan(second.elapsed()) and math.isnan(first.elapsed())
+        assert math.isnan(first.elapsed())  # its clock counted the other case's time
+    with _CpuClock() as after:
+        assert math.isfinite(after.elapsed())
 
 
 def test_twins_from_one_run_cost_one_run_of_the_engines_particle_steps(tmp_path: Path) -> None:
     """distinct_runs keeps one of two twins one run stored and both of twins run apart (other
     wall times); a case's particle-steps are its particles x the steps the engine took to
-    settle and rotate; its core-hours are wall time x threads."""
+    settle and rotate; its core-hours are its CPU time, or wall time x threads when that is
+    not known."""
     cases = [tiny_case("instant"), tiny_case("mean")]
     results = ms.Campaign(cases, tmp_path / "store", block=None).run(max_workers=1,
                                                                      progress=False)
@@ -217,8 +275,10 @@ def test_twins_from_one_run_cost_one_run_of_the_engines_particle_steps(tmp_path:
     assert steps > QUICK.duration_s / sim.dt  # settling took steps too
     for r in results:
         assert r.particle_steps == r.scene.n_particles * steps
+    assert results[0].core_hours == results[0].cpu_time_s / 3600.0
     doubled = dataclasses.replace(results[0], case=Case(cases[0].scene,
-                                                        QUICK.replace(threads=2)))
+                                                        QUICK.replace(threads=2)),
+                                  cpu_time_s=math.nan)
     assert doubled.core_hours == pytest.approx(2 * results[0].wall_time_s / 3600.0, rel=1e-15)
 
 

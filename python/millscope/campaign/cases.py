@@ -311,6 +311,9 @@ class CaseResult:
         unless done. ``record.meta["campaign"]`` says how and where the case ran.
     wall_time_s : float
         Wall-clock time the case took in its worker, s (nan when pending).
+    cpu_time_s : float
+        CPU time of the worker's process over the case's runs, all its threads, s (nan when
+        not known: :class:`~millscope.campaign.partial.RunTime`).
     error, traceback : str or None
         Why a failed case failed: ``"Type: message"`` and a summary of the traceback. For a
         pending case whose file cannot be read, ``error`` says why (the next run computes
@@ -342,6 +345,7 @@ class CaseResult:
     status: Status
     record: TorqueRecord | None = None
     wall_time_s: float = math.nan
+    cpu_time_s: float = math.nan
     error: str | None = None
     traceback: str | None = None
     mean_torque: float = math.nan
@@ -357,7 +361,8 @@ class CaseResult:
     @classmethod
     def from_record(cls, case: Case, record: TorqueRecord,
                     analysis: AnalysisSettings | None = None, *,
-                    wall_time_s: float = math.nan) -> CaseResult:
+                    wall_time_s: float = math.nan,
+                    cpu_time_s: float = math.nan) -> CaseResult:
         """A finished case from its record, analysed over ``analysis.block`` (None: not
         analysed).
 
@@ -366,7 +371,8 @@ class CaseResult:
         is removed) and the spectral energy with the mean and the LTH removed.
         """
         if analysis is None:
-            return cls(case, case.hash(), "done", record, wall_time_s=wall_time_s)
+            return cls(case, case.hash(), "done", record, wall_time_s=wall_time_s,
+                       cpu_time_s=cpu_time_s)
         blk = record.block(*analysis.block)
         lifters = case.scene.drum.lifters
         window: Any = analysis.window
@@ -384,7 +390,7 @@ class CaseResult:
             values = {"mean_torque": blk.mean_torque_Nm, "energy": e.energy,
                       "energy_relative_std": e.relative_std}
         return cls(case, case.hash(), "done", record, wall_time_s=wall_time_s,
-                   analysis=analysis, **values)
+                   cpu_time_s=cpu_time_s, analysis=analysis, **values)
 
     @property
     def scene(self) -> Scene:
@@ -412,9 +418,12 @@ class CaseResult:
 
     @property
     def core_hours(self) -> float:
-        """Wall time x engine threads of the case's run, h: the cores the run held, including
-        any time other work on a shared machine took from it; nan when the wall time is not
+        """What the case's run cost in core-hours, h: its CPU time where it was recorded
+        (:attr:`cpu_time_s`), else wall time x engine threads, the cores the run held,
+        including any time other work on a shared machine took from it; nan when neither is
         known."""
+        if math.isfinite(self.cpu_time_s):
+            return self.cpu_time_s / 3600.0
         return self.wall_time_s * self.case.settings.threads / 3600.0
 
 

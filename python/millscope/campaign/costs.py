@@ -12,7 +12,8 @@ has its table.
 Particle-steps are the particles x the time steps; a finished run's count includes its
 settling (:attr:`~millscope.campaign.CaseResult.particle_steps`), a planned one counts the
 rotation only (settling, a few per cent of a case at the paper's scale, is known only once it
-ran). Core-hours are wall time x engine threads (:attr:`CaseResult.core_hours`).
+ran). Core-hours are a run's CPU time where it was recorded, else its wall time x engine
+threads (:attr:`CaseResult.core_hours`).
 """
 
 from __future__ import annotations
@@ -53,11 +54,11 @@ class CampaignCost:
         1 when done), ``run`` (True for the case whose run is counted: a finished run, once
         for the twins it stored, or a run to come), ``particle_steps`` (of that run: counted
         when done, planned otherwise; 0 when ``run`` is False), ``core_hours`` (of a finished
-        run, nan when its wall time is not known; 0 otherwise) and ``particle_steps_left``
+        run, nan when neither its CPU time nor its wall time is known; 0 otherwise) and ``particle_steps_left``
         (planned x (1 - saved) for a case to run, else 0).
     pace : float
         Particle-steps per core-second of the store's finished runs (their particle-steps
-        over their wall time x threads); nan when the store has none.
+        over their core-hours); nan when the store has none.
     measured_runs : int
         The finished runs the pace is taken from.
     """
@@ -111,8 +112,9 @@ class CampaignCost:
             "One run samples both modes: a case and its twin in the other sampling mode that "
             "one run stored count as one run. Particle-steps: the particles x the time steps "
             "(a finished run's with its settling; a run to come counts its rotation only). "
-            "Core-hours: wall time x engine threads, the cores a run held, including any time "
-            "other work on a shared machine took from it."]
+            "Core-hours: a run's CPU time where it was recorded, else its wall time x engine "
+            "threads, the cores it held, including any time other work on a shared machine "
+            "took from it."]
         if under_way:
             notes.append(f"Runs under way have saved {', '.join(under_way)} of their samples.")
         if (groups["runs_left"] > 0).any():

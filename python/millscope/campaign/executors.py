@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import math
 import multiprocessing
 import multiprocessing.context
 import multiprocessing.process
@@ -146,7 +147,8 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
         ``other`` (``{"sampling": the other mode, "torque_Nm": its samples}``, taken from the
         same steps), or
         "failed" with ``error`` and ``traceback``; always ``hash``, ``wall_time_s`` (s),
-        ``host`` and ``pid``.
+        ``host`` and ``pid``; when done, ``cpu_time_s``: the CPU time of the process over the
+        case's runs, s, or None when it is not known (:class:`~millscope.campaign.partial.RunTime`).
     """
     start = time.perf_counter()
     where = {"host": socket.gethostname(), "pid": os.getpid()}
@@ -157,7 +159,7 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
         s = c.settings
         # A case keeps the torque alone: the energy ledger would cost a quarter of the run
         # and change nothing in it (Simulation, track_energy).
-        sim, records, wall = simulate_resumable(
+        sim, records, spent = simulate_resumable(
             c, None if partial_dir is None else Path(partial_dir),
             checkpoint_every_s=checkpoint_every_s)
         rec = records[s.sampling]
@@ -172,7 +174,8 @@ def run_case(case: Mapping[str, Any], partial_dir: str | None = None,
                 "torque_Nm": rec.torque_Nm[s.warm_up_samples:], "meta": meta,
                 "other": {"sampling": other,
                           "torque_Nm": records[other].torque_Nm[s.warm_up_samples:]},
-                "wall_time_s": wall, **where}
+                "wall_time_s": spent.wall_s,
+                "cpu_time_s": spent.cpu_s if math.isfinite(spent.cpu_s) else None, **where}
     except Exception as exc:  # a failing case is reported, not raised
         return {"status": "failed", "hash": digest, "error": f"{type(exc).__name__}: {exc}",
                 "traceback": _traceback_summary(exc),

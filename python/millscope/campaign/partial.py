@@ -6,8 +6,8 @@ particle-steps). A case that a campaign runs with a *partial folder* (``<store>/
 time, two files there:
 
 * ``<hash>.samples.npz``: the torque samples taken so far (in the case's sampling mode and in
-  the other, which the engine takes from the same steps), the wall-clock time spent on the
-  case and how its settling went;
+  the other, which the engine takes from the same steps), the wall-clock and CPU time spent on
+  the case and how its settling went;
 * ``<hash>.checkpoint.npz``: the simulation's full state
   (:meth:`~millscope.simulation.Simulation.save`, compressed: a paper-scale LDMS #4 state is
   2-4 MB instead of about 7 MB, which keeps it small enough to carry a case from one machine
@@ -30,9 +30,12 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import itertools
 import json
 import math
+import threading
 import time
+import types
 import warnings
 import zipfile
 from dataclasses import dataclass
@@ -52,7 +55,7 @@ from ..engine.simulation import (
 from ..signal.record import TorqueRecord
 from .cases import Case
 
-__all__ = ["CHECKPOINT_EVERY_S", "PARTIAL_DIR", "PartialFiles", "saved_share",
+__all__ = ["CHECKPOINT_EVERY_S", "PARTIAL_DIR", "PartialFiles", "RunTime", "saved_share",
            "simulate_resumable"]
 
 #: The folder of a store that holds the in-case checkpoints of unfinished cases.
@@ -78,7 +81,7 @@ class PartialFiles:
 
     @property
     def samples(self) -> Path:
-        """The samples taken so far, the wall time spent and the settle report."""
+        """The samples taken so far, the wall and CPU time spent and the settle report."""
         return self.folder / f"{self.digest}.samples.npz"
 
     @property
@@ -93,15 +96,72 @@ class PartialFiles:
                 path.unlink()
 
 
+@dataclass(frozen=True)
+class RunTime:
+    """What a case's runs took, over every run of it (a resumed case: the killed runs' saved
+    time and the last run's).
+
+    Attributes
+    ----------
+    wall_s : float
+        Wall-clock time, s.
+    cpu_s : float
+        CPU time (user + system) of the process that ran it, all its threads (the engine's
+        team too), s. nan when it is not known: when another case ran in the same process at
+        the same time (a dask worker with several threads: one clock counts both), or when a
+        run of the case saved no CPU time (a checkpoint of a millscope that did not record it).
+    """
+
+    wall_s: float
+    cpu_s: float
+
+
+class _CpuClock:
+    """The CPU time of this process (:func:`time.process_time`) while one case runs, s, or nan
+    when another case ran in the process meanwhile.
+
+    The process's clock counts every thread, so two cases that overlap in one process (threads
+    of a dask worker) cannot be told apart on it. The cases under way are kept per process,
+    as the clock is: a class attribute, shared by the threads that run cases.
+    """
+
+    _lock = threading.Lock()
+    _ids = itertools.count()
+    _overlapped: dict[int, bool] = {}  # the cases under way in this process: id -> overlapped
+
+    def __enter__(self) -> _CpuClock:
+        with self._lock:
+            self._id = next(self._ids)
+            alone = not self._overlapped
+            for other in self._overlapped:
+                self._overlapped[other] = True
+            self._overlapped[self._id] = not alone
+        self._start = time.process_time()
+        return self
+
+    def elapsed(self) -> float:
+        """CPU time since the case began, s; nan once another case has overlapped it."""
+        spent = time.process_time() - self._start
+        with self._lock:
+            return math.nan if self._overlapped[self._id] else spent
+
+    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None,
+                 tb: types.TracebackType | None) -> None:
+        with self._lock:
+            del self._overlapped[self._id]
+
+
 @dataclass
 class _Progress:
     """What a case has done so far: its samples (s; N m in the case's sampling mode and in the
-    other), the wall time spent on it (s) and how its settling went."""
+    other), the wall and CPU time spent on it (s; :class:`RunTime`) and how its settling
+    went."""
 
     time_s: NDArray[np.float64]
     torque_Nm: NDArray[np.float64]
     other_Nm: NDArray[np.float64]
     wall_time_s: float
+    cpu_time_s: float
     settle: SettleReport | None
 
     def cut(self, taken: int) -> None:
@@ -144,6 +204,7 @@ def _save(files: PartialFiles, sim: Simulation, done: _Progress) -> None:
     """Writes the samples, then the checkpoint (the order the module docstring relies on)."""
     _prepare_folder(files.folder)
     meta = {"format": _FORMAT, "hash": files.digest, "wall_time_s": done.wall_time_s,
+            "cpu_time_s": done.cpu_time_s if math.isfinite(done.cpu_time_s) else None,
             "settle": None if done.settle is None else dataclasses.asdict(done.settle)}
     with atomic_write(files.samples, "wb") as fh:
         np.savez(fh, allow_pickle=False, meta_json=np.array(json.dumps(meta)),
@@ -182,6 +243,10 @@ def _read_samples(files: PartialFiles, most_samples: int) -> _Progress:
     if not isinstance(wall, (int, float)) or isinstance(wall, bool) or not \
             (math.isfinite(wall) and wall >= 0):
         raise ValueError(f"its wall_time_s = {wall!r} is not a time >= 0")
+    cpu = meta.get("cpu_time_s")  # absent from the checkpoints of older versions: not known
+    if cpu is not None and (not isinstance(cpu, (int, float)) or isinstance(cpu, bool)
+                            or not (math.isfinite(cpu) and cpu >= 0)):
+        raise ValueError(f"its cpu_time_s = {cpu!r} is not a time >= 0")
     settle = meta.get("settle")
     report = None
     if settle is not None:
@@ -190,7 +255,7 @@ def _read_samples(files: PartialFiles, most_samples: int) -> _Progress:
             raise ValueError("its settle report is not one")
         report = SettleReport(float(settle["time_s"]), float(settle["kinetic_energy_ratio"]),
                               bool(settle["converged"]))
-    return _Progress(t, y, o, float(wall), report)
+    return _Progress(t, y, o, float(wall), math.nan if cpu is None else float(cpu), report)
 
 
 def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | None:
@@ -217,7 +282,7 @@ def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | N
     except (OSError, ValueError, KeyError, CheckpointError, zipfile.BadZipFile) as exc:
         warnings.warn(f"the partial run of case {files.digest[:12]} in {files.folder} cannot "
                       f"be continued ({exc}); the case starts afresh", RuntimeWarning,
-                      stacklevel=3)
+                      stacklevel=4)
         files.remove()
         return None
     sim.settle_report = done.settle
@@ -227,7 +292,7 @@ def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | N
 
 def simulate_resumable(case: Case, folder: Path | None, *,
                        checkpoint_every_s: float = CHECKPOINT_EVERY_S,
-                       ) -> tuple[Simulation, dict[Sampling, TorqueRecord], float]:
+                       ) -> tuple[Simulation, dict[Sampling, TorqueRecord], RunTime]:
     """Runs ``case`` (fill, settle, the whole ``duration_s``) from where a killed run left it
     in ``folder``, saving its progress there every ``checkpoint_every_s`` s of wall time.
 
@@ -244,37 +309,45 @@ def simulate_resumable(case: Case, folder: Path | None, *,
 
     Returns
     -------
-    (Simulation, dict, float)
+    (Simulation, dict, RunTime)
         The simulation after the run; the record of every sample since the start of rotation
         in each sampling mode, ``"instant"`` and ``"mean"`` (the case's as
         :func:`~millscope.campaign.simulate_case` returns it, and the other from the same
-        steps); and the wall time spent on the case in every run of it, s. Interrupted with
+        steps); and the wall and CPU time spent on the case in every run of it. Interrupted with
         Ctrl-C, the records are shorter and their ``meta["interrupted"]`` is true; what was
         saved stays for the next run.
     """
+    with _CpuClock() as cpu:
+        return _simulate_resumable(case, folder, checkpoint_every_s, cpu)
+
+
+def _simulate_resumable(case: Case, folder: Path | None, checkpoint_every_s: float,
+                        cpu: _CpuClock) -> tuple[Simulation, dict[Sampling, TorqueRecord],
+                                                 RunTime]:
     s = case.settings
     files = None if folder is None else PartialFiles(Path(folder), case.hash())
     start = time.perf_counter()
     resumed = None if files is None else _resume(case, files)
     if resumed is None:
         sim = case.simulation()
-        done = _Progress(np.empty(0), np.empty(0), np.empty(0), 0.0, None)
+        done = _Progress(np.empty(0), np.empty(0), np.empty(0), 0.0, 0.0, None)
     else:
         sim, done = resumed
-    spent_before = done.wall_time_s
+    wall_before, cpu_before = done.wall_time_s, done.cpu_time_s
     saving = files is not None
     last_save = start
 
     def save() -> None:
         nonlocal saving, last_save
         assert files is not None  # saving only with a folder
-        done.wall_time_s = spent_before + time.perf_counter() - start
+        done.wall_time_s = wall_before + time.perf_counter() - start
+        done.cpu_time_s = cpu_before + cpu.elapsed()
         try:
             _save(files, sim, done)
         except OSError as exc:
             warnings.warn(f"case {files.digest[:12]}: its progress cannot be saved in "
                           f"{files.folder} ({exc}); it runs on without in-case checkpoints",
-                          RuntimeWarning, stacklevel=3)
+                          RuntimeWarning, stacklevel=4)
             saving = False
         last_save = time.perf_counter()
 
@@ -306,7 +379,7 @@ def simulate_resumable(case: Case, folder: Path | None, *,
             done.extend(pending)
             save()
     done.extend(pending)
-    wall = spent_before + time.perf_counter() - start
+    spent = RunTime(wall_before + time.perf_counter() - start, cpu_before + cpu.elapsed())
     out = {s.sampling: TorqueRecord(done.time_s, done.torque_Nm, metas[s.sampling]),
            other: TorqueRecord(done.time_s, done.other_Nm, metas[other])}
-    return sim, out, wall
+    return sim, out, spent

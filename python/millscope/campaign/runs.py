@@ -7,7 +7,7 @@ process pool by default, or a ``dask.distributed`` Client) and keeps the results
 directory::
 
     store/
-      manifest.json          every case: hash, name, status, file, wall time, error
+      manifest.json          every case: hash, name, status, file, wall and CPU time, error
       cases/<hash>.npz       a finished case: its TorqueRecord (record.py's .npz format), the
                              case and how it ran in meta["campaign"]
       cases/<hash>.failed.json   a case that raised: the error and a traceback summary
@@ -470,8 +470,8 @@ class Campaign:
         for c, digest in zip(self._cases, self._hashes, strict=True):
             entries[digest] = on_disk.pop(digest, {}) or {
                 "hash": digest, "name": c.scene.name, "seed": c.settings.seed,
-                "status": "pending", "file": None, "wall_time_s": None, "error": None,
-                "traceback": None}
+                "status": "pending", "file": None, "wall_time_s": None, "cpu_time_s": None,
+                "error": None, "traceback": None}
         entries.update(on_disk)
         return entries
 
@@ -568,7 +568,8 @@ class Campaign:
         digest = self._hashes[k]
         info: dict[str, Any] = {
             "format": CASE_FORMAT, "hash": digest, "case": case.to_dict(),
-            "wall_time_s": outcome.get("wall_time_s"), "host": outcome.get("host"),
+            "wall_time_s": outcome.get("wall_time_s"), "cpu_time_s": outcome.get("cpu_time_s"),
+            "host": outcome.get("host"),
             "pid": outcome.get("pid"), "millscope_version": _core.build_info()["version"]}
         failure = _failure_path(self._store, digest)
         if outcome["status"] == "done" and outcome.get("hash") != digest:
@@ -614,7 +615,8 @@ class Campaign:
                 else:
                     out.append(CaseResult.from_record(
                         case, record, self._analysis,
-                        wall_time_s=_number(info.get("wall_time_s"))))
+                        wall_time_s=_seconds(info.get("wall_time_s")),
+                        cpu_time_s=_seconds(info.get("cpu_time_s"))))
                     continue
             failure = _failure_path(self._store, digest)
             if failure.exists():
@@ -624,7 +626,7 @@ class Campaign:
                     problems.append(f"{failure.relative_to(self._store).as_posix()}: {exc}")
                 else:
                     out.append(CaseResult(case, digest, "failed",
-                                          wall_time_s=_number(info.get("wall_time_s")),
+                                          wall_time_s=_seconds(info.get("wall_time_s")),
                                           error=info.get("error"),
                                           traceback=info.get("traceback")))
                     continue
@@ -683,8 +685,11 @@ def _twin_outcome(outcome: Mapping[str, Any], digest: str) -> dict[str, Any]:
     return {**outcome, "hash": digest, "torque_Nm": other["torque_Nm"], "meta": meta}
 
 
-def _number(value: object) -> float:
-    return float(value) if isinstance(value, (int, float)) else math.nan
+def _seconds(value: object) -> float:
+    """A time a case file states, s: a number >= 0, else nan (not known)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return math.nan
+    return float(value) if math.isfinite(value) and value >= 0 else math.nan
 
 
 @contextlib.contextmanager

@@ -250,6 +250,7 @@ def _entry(info: Mapping[str, Any], status: Status, path: Path | None,
         "status": status,
         "file": None if path is None else path.relative_to(store).as_posix(),
         "wall_time_s": info.get("wall_time_s"),
+        "cpu_time_s": info.get("cpu_time_s"),
         "error": info.get("error"),
         "traceback": info.get("traceback"),
     }

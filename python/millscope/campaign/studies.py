@@ -104,7 +104,8 @@ def _run_of(plan: StudyPlan, index: int, result: CaseResult) -> StudyRun:
                                 plan.window)
     assert result.record is not None  # done cases have a record
     analysed = CaseResult.from_record(case, result.record, analysis,
-                                      wall_time_s=result.wall_time_s)
+                                      wall_time_s=result.wall_time_s,
+                                      cpu_time_s=result.cpu_time_s)
     # The kept samples are stamped warm-up + sample_dt .. duration (the end of their
     # intervals), so the campaign's block [warm-up, duration) holds one sample fewer than
     # the record: energies are compared per the block length actually analysed.

@@ -30,7 +30,7 @@ CASE_COLUMNS: dict[str, Kind] = {
     "mean_torque_Nm": "float", "lth_hz": "float", "lth_amplitude_Nm": "float",
     "lth_noise_Nm": "float", "lth_snr": "float", "lth_distinct": "bool",
     "energy_Nm2s": "float", "energy_relative_std": "float", "wall_time_s": "float",
-    "error": "str",
+    "cpu_time_s": "float", "error": "str",
 }
 
 
@@ -55,7 +55,7 @@ def case_row(r: CaseResult) -> dict[str, Any]:
         "mean_torque_Nm": r.mean_torque, "lth_hz": r.lth_hz, "lth_amplitude_Nm": r.lth_amplitude,
         "lth_noise_Nm": r.lth_noise, "lth_snr": r.lth_snr, "lth_distinct": r.lth_distinct,
         "energy_Nm2s": r.energy, "energy_relative_std": r.energy_relative_std,
-        "wall_time_s": r.wall_time_s, "error": r.error,
+        "wall_time_s": r.wall_time_s, "cpu_time_s": r.cpu_time_s, "error": r.error,
     }
 
 
@@ -87,7 +87,8 @@ class CaseResults(list[CaseResult]):
         * the figures of the block, float64: ``mean_torque_Nm`` (N m), ``lth_hz`` (Hz),
           ``lth_amplitude_Nm`` and ``lth_noise_Nm`` (N m), ``lth_snr`` (dimensionless),
           ``energy_Nm2s`` ((N m)^2 s, eq. 11), ``energy_relative_std`` (dimensionless),
-          ``wall_time_s`` (s); ``lth_distinct``: bool;
+          ``wall_time_s`` (s), ``cpu_time_s`` (s, the worker process's CPU time; nan when not
+          recorded); ``lth_distinct``: bool;
         * ``error``: why a case failed, str, missing when done.
 
         Integer columns with a missing value are pandas' nullable Int64. Per-unit energies
