@@ -26,8 +26,8 @@ its first 0.1 s it reads less torque than millscope from the same state (12-14 %
 Each stage's output is kept in a folder of ``--workdir`` named by the case, the seed, the
 spin-up and the length, and reused when present (``--fresh`` redoes them); each case's row is
 appended as soon as the case is done. LIGGGHTS comes from Debian (``apt-get install liggghts
-openmpi-bin``); nothing of it is in the package. With the defaults, LIGGGHTS took 8 (balls), 15 (LDMS#1) and 30 (LDMS#3)
-minutes of one core per case, and millscope less than half of that.
+openmpi-bin``); nothing of it is in the package. With the defaults, LIGGGHTS took 8 (balls),
+15 (LDMS#1) and 30 (LDMS#3) minutes of one core per case, and millscope less than half of that.
 """
 
 from __future__ import annotations
@@ -130,7 +130,8 @@ def run_millscope(folder: Path, length_s: float) -> tuple[np.ndarray, np.ndarray
         rec = sim.run(length_s, sample_dt=SAMPLE_DT_S, sampling="mean", progress=False)
         # The record's times are the ends of the intervals; keep their starts.
         liggghts_state._write_atomic(out, "".join(
-            f"{t - t0 - SAMPLE_DT_S:.9f} {q:.9g}\n" for t, q in zip(rec.time_s, rec.torque_Nm)))
+            f"{t - t0 - SAMPLE_DT_S:.9f} {q:.9g}\n"
+            for t, q in zip(rec.time_s, rec.torque_Nm, strict=True)))
     data = np.loadtxt(out, ndmin=2)
     return data[:, 0], data[:, 1]
 

@@ -171,7 +171,8 @@ def test_drive_power_bad_inputs() -> None:
         drive_power(rec)
     with pytest.raises(ValueError, match="rotation_hz = -1.0 Hz is not valid"):
         drive_power(rec, -1.0)
-    with pytest.raises(ValueError, match=r"batches = 1 is not valid; it must be an integer in \[2, 50\]"):
+    with pytest.raises(ValueError,
+                       match=r"batches = 1 is not valid; it must be an integer in \[2, 50\]"):
         drive_power(rec, 1.0, batches=1)
     with pytest.raises(ValueError, match="holds 1 samples"):
         drive_power(rec, 1.0, t_from=0.5, t_to=0.505)

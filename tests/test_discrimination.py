@@ -18,7 +18,6 @@ import millscope as ms
 from millscope.analysis import analyze_campaign
 from millscope.calibration.discrimination import discrimination, order_probability
 from millscope.calibration.fit import Calibration, NoIntervalWarning, estimate_fill
-
 from millscope.report.reports import write_report
 
 from .synthetic_campaign import case_results, synthetic_store

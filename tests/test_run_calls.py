@@ -91,7 +91,8 @@ def test_ctrl_c_stops_a_run_between_calls() -> None:
 
 @pytest.mark.parametrize("make, call, name", [
     (lambda: small_sim(), lambda sim: sim.run(1e300, progress=False), "duration"),
-    (lambda: small_sim(dt=1e-14), lambda sim: sim.run(0.002, 0.001, progress=False), "settle_max_s"),
+    (lambda: small_sim(dt=1e-14), lambda sim: sim.run(0.002, 0.001, progress=False),
+     "settle_max_s"),
     (lambda: small_sim(dt=1e-14), lambda sim: sim.settle(progress=False), "settle_max_s"),
 ])
 def test_absurd_step_counts_are_refused_before_any_work(make, call, name) -> None:

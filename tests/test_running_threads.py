@@ -133,7 +133,7 @@ def test_the_running_threads_change_nothing_in_the_results() -> None:
     assert one.running_threads == 1
     used = sw._running.used
     assert len(used) > 10 and {1, 2} <= set(used)  # it did switch back and forth
-    assert all(a != b for a, b in zip(used, used[1:]))
+    assert all(a != b for a, b in zip(used, used[1:], strict=False))
     assert np.abs(rec_ref.torque_Nm).max() > 0
     for sim, rec in ((one, rec_one), (sw, rec_sw)):
         assert np.array_equal(rec.torque_Nm, rec_ref.torque_Nm)

@@ -47,8 +47,8 @@ if TYPE_CHECKING:  # for annotations only: the campaign sits above this layer
     from ..campaign.cases import CaseResult
 
 __all__ = ["LogFit", "log_fit", "log_fit_coefficients", "per_unit", "Calibration",
-           "CalibrationError", "FillEstimate", "estimate_fill", "OutsideCalibrationWarning", "NoIntervalWarning",
-           "MIN_LEVELS_FOR_INTERVALS"]
+           "CalibrationError", "FillEstimate", "estimate_fill", "OutsideCalibrationWarning",
+           "NoIntervalWarning", "MIN_LEVELS_FOR_INTERVALS"]
 
 CALIBRATION_FORMAT = "millscope-calibration-2"
 READABLE_FORMATS = ("millscope-calibration-1", CALIBRATION_FORMAT)

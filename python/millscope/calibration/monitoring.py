@@ -247,7 +247,8 @@ def _monitor_record(record: TorqueRecord, calibration: Calibration, *, window_s:
     if cal.band_hz is None:
         label = f" {cal.label}" if cal.label else ""
         warnings.warn(f"the calibration{label} gives no band_hz (its band_hz is null, or its "
-                      f"file is of format 1, which has none) and no band_hz was given: the {record.sample_rate_hz:g} Hz record is neither decimated "
+                      f"file is of format 1, which has none) and no band_hz was given: the "
+                      f"{record.sample_rate_hz:g} Hz record is neither decimated "
                       f"nor band-limited, its energy counted up to {nyquist:g} Hz; if the "
                       "calibration's records were sampled slower, the levels are biased. Pass "
                       "band_hz= (command line --band-hz), the Nyquist frequency of the "

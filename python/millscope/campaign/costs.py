@@ -54,8 +54,8 @@ class CampaignCost:
         1 when done), ``run`` (True for the case whose run is counted: a finished run, once
         for the twins it stored, or a run to come), ``particle_steps`` (of that run: counted
         when done, planned otherwise; 0 when ``run`` is False), ``core_hours`` (of a finished
-        run, nan when neither its CPU time nor its wall time is known; 0 otherwise) and ``particle_steps_left``
-        (planned x (1 - saved) for a case to run, else 0).
+        run, nan when neither its CPU time nor its wall time is known; 0 otherwise) and
+        ``particle_steps_left`` (planned x (1 - saved) for a case to run, else 0).
     pace : float
         Particle-steps per core-second of the store's finished runs (their particle-steps
         over their core-hours); nan when the store has none.

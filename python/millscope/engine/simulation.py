@@ -46,8 +46,8 @@ import warnings
 import zipfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from functools import partial
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal, TypeVar
 
@@ -441,7 +441,6 @@ class Simulation:
         self._check_steps("settle_max_s", t_max)
         if self._phase == "empty":
             self.fill()
-        e = self._engine
         # The rest measure every 0.02 s of simulated time, or more often where that much time
         # would make a call too long to interrupt.
         chunk = min(max(1, int(round(0.02 / self.dt))), self._steps_per_call())

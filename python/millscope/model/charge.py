@@ -115,13 +115,13 @@ def charge_shape(positions_m: ArrayLike, radii_m: ArrayLike, masses_kg: ArrayLik
     * **Toe and shoulder.** The particles whose centres lie within ``band_m`` of the shell
       (radius >= R - band_m, the shell layer) are binned by angle (``bin_rad`` wide) and the
       mass per bin is averaged over a moving window ``smooth_rad`` wide (so that the room a
-      lifter takes in the layer does not read as a gap in the charge). A bin is *full* when its mass is at least half (:data:`THRESHOLD`) the typical mass of a
-      full bin, the 90th percentile (:data:`FULL_PERCENTILE`) of the non-empty bins. Starting
-      from the bin of the shell layer's mean direction, the arc of full bins is followed each
-      way; each end is where the mass per bin crosses the threshold, interpolated linearly
-      between bin centres. The counterclockwise end is the shoulder, the other the toe.
-      Particles in flight rarely fill a shell bin to half, so the ends mark where the dense
-      charge leaves and meets the shell.
+      lifter takes in the layer does not read as a gap in the charge). A bin is *full* when its
+      mass is at least half (:data:`THRESHOLD`) the typical mass of a full bin, the 90th
+      percentile (:data:`FULL_PERCENTILE`) of the non-empty bins. Starting from the bin of the
+      shell layer's mean direction, the arc of full bins is followed each way; each end is where
+      the mass per bin crosses the threshold, interpolated linearly between bin centres. The
+      counterclockwise end is the shoulder, the other the toe. Particles in flight rarely fill a
+      shell bin to half, so the ends mark where the dense charge leaves and meets the shell.
     * **Centre of mass.** The mass-weighted mean of x and y.
     * **Angle of repose.** The cross-section is divided into square cells ``cell_m`` wide; a
       cell is *dense* when it holds at least half the typical mass of a full cell (the same

@@ -5,8 +5,9 @@ A :class:`Scene` is a drum (:class:`Drum`, with optional :class:`Lifters`), a ch
 (restitution, friction) for every pair of materials in use, plus the rotation speed.
 Everything is SI (m, kg, Pa, s, rad/s, Hz). Every class checks its fields on construction and
 raises ``ValueError`` naming the class, the field, the value and the valid range, e.g.
-``Fraction.diameter = -0.01 m is not valid; it must be in [0.0001, 20] m``. Numbers may be given as Python
-or numpy ints and floats and are stored as ``float``; bools, NaN and infinities are refused.
+``Fraction.diameter = -0.01 m is not valid; it must be in [0.0001, 20] m``. Numbers may be
+given as Python or numpy ints and floats and are stored as ``float``; bools, NaN and infinities
+are refused.
 
 Scenes round-trip through plain JSON-able dicts (:meth:`Scene.to_dict`,
 :meth:`Scene.from_dict`), which is how records and checkpoints carry them, and through JSON

@@ -36,8 +36,8 @@ from tqdm.auto import tqdm
 
 from .. import _core
 from .._files import atomic_write
-from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from ..calibration.discrimination import discrimination
+from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
 from ..campaign.cases import CaseResult
 from ..campaign.costs import campaign_cost

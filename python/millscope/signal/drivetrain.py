@@ -74,8 +74,8 @@ from .._samples import check_samples
 from .record import TorqueRecord
 from .spectral import MAX_LIFTERS
 
-__all__ = ["DECIMATE_FACTOR", "DriveError", "DriveTrain", "GearStage", "InterferenceLine", "Motor", "decimate",
-           "decimate_record"]
+__all__ = ["DECIMATE_FACTOR", "DriveError", "DriveTrain", "GearStage", "InterferenceLine",
+           "Motor", "decimate", "decimate_record"]
 
 #: Records sampled faster than this x the analysis band are decimated to this x the band: the
 #: anti-aliasing filter of :func:`decimate` rolls off over the top fifth below the new Nyquist
