@@ -236,6 +236,15 @@ def test_a_campaign_runs_two_sampling_twins_once(tmp_path: Path, reference: dict
     assert 0.0 < results[0].cpu_time_s <= results[0].wall_time_s * (os.cpu_count() or 1)
     manifest = runs.read_manifest(tmp_path / "store")["cases"]
     assert [e["cpu_time_s"] for e in manifest] == [r.cpu_time_s for r in results]
+    # times a case file states are taken only when they are numbers >= 0 (files are untrusted)
+    path = tmp_path / "store" / manifest[0]["file"]
+    rec = ms.TorqueRecord.load(path)
+    for wall, cpu in ((True, -1.0), ("12", float("inf")), (-3.0, None)):
+        rec.meta["campaign"].update(wall_time_s=wall, cpu_time_s=cpu)
+        rec.save(path)
+        read = camp.results()[0]
+        assert read.ok and math.isnan(read.wall_time_s) and math.isnan(read.cpu_time_s)
+        assert math.isnan(read.core_hours)
 
 
 def test_the_cpu_clock_of_cases_that_overlap_in_one_process_is_not_known() -> None:
