@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import _checks
 from .._files import atomic_write
 from ..engine.simulation import (
     CheckpointError,
@@ -239,14 +240,11 @@ def _read_samples(files: PartialFiles, most_samples: int) -> _Progress:
         raise ValueError("its samples are not three float64 arrays of one length")
     if not all(np.all(np.isfinite(a)) for a in (t, y, o)):
         raise ValueError("its samples are not all finite")
-    wall = meta.get("wall_time_s")
-    if not isinstance(wall, (int, float)) or isinstance(wall, bool) or not \
-            (math.isfinite(wall) and wall >= 0):
-        raise ValueError(f"its wall_time_s = {wall!r} is not a time >= 0")
+    wall = _checks.number("its wall_time_s", meta.get("wall_time_s"), ValueError, low=0.0,
+                          unit="s")
     cpu = meta.get("cpu_time_s")  # absent from the checkpoints of older versions: not known
-    if cpu is not None and (not isinstance(cpu, (int, float)) or isinstance(cpu, bool)
-                            or not (math.isfinite(cpu) and cpu >= 0)):
-        raise ValueError(f"its cpu_time_s = {cpu!r} is not a time >= 0")
+    if cpu is not None:
+        cpu = _checks.number("its cpu_time_s", cpu, ValueError, low=0.0, unit="s")
     settle = meta.get("settle")
     report = None
     if settle is not None:
@@ -255,7 +253,7 @@ def _read_samples(files: PartialFiles, most_samples: int) -> _Progress:
             raise ValueError("its settle report is not one")
         report = SettleReport(float(settle["time_s"]), float(settle["kinetic_energy_ratio"]),
                               bool(settle["converged"]))
-    return _Progress(t, y, o, float(wall), math.nan if cpu is None else float(cpu), report)
+    return _Progress(t, y, o, wall, math.nan if cpu is None else cpu, report)
 
 
 def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | None:

@@ -686,10 +686,9 @@ def _twin_outcome(outcome: Mapping[str, Any], digest: str) -> dict[str, Any]:
 
 
 def _seconds(value: object) -> float:
-    """A time a case file states, s: a number >= 0, else nan (not known)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return math.nan
-    return float(value) if math.isfinite(value) and value >= 0 else math.nan
+    """A time a case file states, s: a finite number >= 0, else nan (not known)."""
+    x = _checks.as_float(value)
+    return x if math.isfinite(x) and x >= 0 else math.nan
 
 
 @contextlib.contextmanager
