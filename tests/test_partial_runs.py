@@ -25,6 +25,7 @@ from millscope.campaign.executors import simulate_case
 from millscope.campaign.partial import (
     PARTIAL_DIR,
     PartialFiles,
+    RunTime,
     _CpuClock,
     _Progress,
     _save,
@@ -45,7 +46,7 @@ def killed_after(case: Case, folder: Path, samples: int, extra: int = 0) -> Part
     s = case.settings
     sim = case.simulation()
     report = sim.settle(progress=False)
-    done = _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, 0.75, report)
+    done = _Progress(np.empty(0), np.empty(0), np.empty(0), RunTime(1.5, 0.75), report)
     other = "mean" if s.sampling == "instant" else "instant"
     sim.run(samples * s.sample_dt, s.sample_dt, s.sampling, progress=False)
     done.extend([(sim.last_records[s.sampling], sim.last_records[other])])
@@ -101,7 +102,8 @@ def test_a_killed_case_goes_on_to_the_same_record(tmp_path: Path, reference: dic
         sim = case.simulation()
         report = sim.settle(progress=False)
         files = PartialFiles(tmp_path, case.hash())
-        _save(files, sim, _Progress(np.empty(0), np.empty(0), np.empty(0), 1.5, 0.75, report))
+        _save(files, sim,
+              _Progress(np.empty(0), np.empty(0), np.empty(0), RunTime(1.5, 0.75), report))
     outcome = run_case(case.to_dict(), str(tmp_path), checkpoint_every_s=1e9)
     assert_same_record(outcome, reference[sampling])
     # the time the killed run had spent counts, wall and CPU; this run's CPU time is at most

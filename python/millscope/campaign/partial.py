@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import itertools
 import json
 import math
 import threading
@@ -122,21 +121,23 @@ class _CpuClock:
     when another case ran in the process meanwhile.
 
     The process's clock counts every thread, so two cases that overlap in one process (threads
-    of a dask worker) cannot be told apart on it. The cases under way are kept per process,
+    of a dask worker) cannot be told apart on it. The clocks under way are kept per process,
     as the clock is: a class attribute, shared by the threads that run cases.
     """
 
     _lock = threading.Lock()
-    _ids = itertools.count()
-    _overlapped: dict[int, bool] = {}  # the cases under way in this process: id -> overlapped
+    _running: set[_CpuClock] = set()  # the clocks of the cases under way in this process
+
+    def __init__(self) -> None:
+        self._overlapped = False  # whether another case ran in the process meanwhile
+        self._start = 0.0  # the process's CPU time when the case began, s
 
     def __enter__(self) -> _CpuClock:
         with self._lock:
-            self._id = next(self._ids)
-            alone = not self._overlapped
-            for other in self._overlapped:
-                self._overlapped[other] = True
-            self._overlapped[self._id] = not alone
+            for other in self._running:
+                other._overlapped = True
+            self._overlapped = bool(self._running)
+            self._running.add(self)
         self._start = time.process_time()
         return self
 
@@ -144,25 +145,23 @@ class _CpuClock:
         """CPU time since the case began, s; nan once another case has overlapped it."""
         spent = time.process_time() - self._start
         with self._lock:
-            return math.nan if self._overlapped[self._id] else spent
+            return math.nan if self._overlapped else spent
 
     def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None,
                  tb: types.TracebackType | None) -> None:
         with self._lock:
-            del self._overlapped[self._id]
+            self._running.discard(self)
 
 
 @dataclass
 class _Progress:
     """What a case has done so far: its samples (s; N m in the case's sampling mode and in the
-    other), the wall and CPU time spent on it (s; :class:`RunTime`) and how its settling
-    went."""
+    other), the wall and CPU time spent on it and how its settling went."""
 
     time_s: NDArray[np.float64]
     torque_Nm: NDArray[np.float64]
     other_Nm: NDArray[np.float64]
-    wall_time_s: float
-    cpu_time_s: float
+    spent: RunTime
     settle: SettleReport | None
 
     def cut(self, taken: int) -> None:
@@ -204,8 +203,9 @@ def _prepare_folder(folder: Path) -> None:
 def _save(files: PartialFiles, sim: Simulation, done: _Progress) -> None:
     """Writes the samples, then the checkpoint (the order the module docstring relies on)."""
     _prepare_folder(files.folder)
-    meta = {"format": _FORMAT, "hash": files.digest, "wall_time_s": done.wall_time_s,
-            "cpu_time_s": done.cpu_time_s if math.isfinite(done.cpu_time_s) else None,
+    cpu = done.spent.cpu_s
+    meta = {"format": _FORMAT, "hash": files.digest, "wall_time_s": done.spent.wall_s,
+            "cpu_time_s": cpu if math.isfinite(cpu) else None,
             "settle": None if done.settle is None else dataclasses.asdict(done.settle)}
     with atomic_write(files.samples, "wb") as fh:
         np.savez(fh, allow_pickle=False, meta_json=np.array(json.dumps(meta)),
@@ -253,7 +253,7 @@ def _read_samples(files: PartialFiles, most_samples: int) -> _Progress:
             raise ValueError("its settle report is not one")
         report = SettleReport(float(settle["time_s"]), float(settle["kinetic_energy_ratio"]),
                               bool(settle["converged"]))
-    return _Progress(t, y, o, wall, math.nan if cpu is None else cpu, report)
+    return _Progress(t, y, o, RunTime(wall, math.nan if cpu is None else cpu), report)
 
 
 def _resume(case: Case, files: PartialFiles) -> tuple[Simulation, _Progress] | None:
@@ -328,18 +328,21 @@ def _simulate_resumable(case: Case, folder: Path | None, checkpoint_every_s: flo
     resumed = None if files is None else _resume(case, files)
     if resumed is None:
         sim = case.simulation()
-        done = _Progress(np.empty(0), np.empty(0), np.empty(0), 0.0, 0.0, None)
+        done = _Progress(np.empty(0), np.empty(0), np.empty(0), RunTime(0.0, 0.0), None)
     else:
         sim, done = resumed
-    wall_before, cpu_before = done.wall_time_s, done.cpu_time_s
+    before = done.spent  # what the killed runs spent
     saving = files is not None
     last_save = start
+
+    def spent() -> RunTime:
+        """The time spent on the case so far, in every run of it."""
+        return RunTime(before.wall_s + time.perf_counter() - start, before.cpu_s + cpu.elapsed())
 
     def save() -> None:
         nonlocal saving, last_save
         assert files is not None  # saving only with a folder
-        done.wall_time_s = wall_before + time.perf_counter() - start
-        done.cpu_time_s = cpu_before + cpu.elapsed()
+        done.spent = spent()
         try:
             _save(files, sim, done)
         except OSError as exc:
@@ -377,7 +380,6 @@ def _simulate_resumable(case: Case, folder: Path | None, checkpoint_every_s: flo
             done.extend(pending)
             save()
     done.extend(pending)
-    spent = RunTime(wall_before + time.perf_counter() - start, cpu_before + cpu.elapsed())
     out = {s.sampling: TorqueRecord(done.time_s, done.torque_Nm, metas[s.sampling]),
            other: TorqueRecord(done.time_s, done.other_Nm, metas[other])}
-    return sim, out, spent
+    return sim, out, spent()
