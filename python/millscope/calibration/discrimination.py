@@ -15,6 +15,11 @@ And per level, the fill estimate of each block (:func:`~millscope.calibration.es
 against the group's calibration): the spread of the point estimates over the repeats and the
 mean width of their prediction intervals, in load levels. An interval narrower than the
 spacing of the levels tells neighbouring levels apart; one wider does not.
+
+The group's own calibration has seen the blocks it estimates. :func:`held_out` estimates each
+seed's blocks against a calibration of the group's other seeds instead, as a plant's new block
+would be: how far the estimates land from the true level, and how many true levels their
+intervals hold (the intervals' coverage, which should be near their confidence).
 """
 
 from __future__ import annotations
@@ -23,16 +28,27 @@ import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.special import ndtr
 
 from .. import _checks
 from ..signal.record import TorqueRecord
-from .fit import Calibration, NoIntervalWarning, OutsideCalibrationWarning, estimate_fill
-from .groups import GroupAnalysis
+from .fit import (
+    Calibration,
+    FillEstimate,
+    NoIntervalWarning,
+    OutsideCalibrationWarning,
+    estimate_fill,
+)
+from .groups import GroupAnalysis, analyze_campaign
 
-__all__ = ["Discrimination", "LevelPair", "LevelSpread", "discrimination", "order_probability"]
+if TYPE_CHECKING:  # for annotations only: the campaign sits above this layer
+    from ..campaign.cases import CaseResult
+
+__all__ = ["Discrimination", "HeldOut", "HeldOutLevel", "LevelPair", "LevelSpread",
+           "discrimination", "held_out", "order_probability"]
 
 
 @dataclass(frozen=True)
@@ -203,11 +219,8 @@ def discrimination(group: GroupAnalysis, calibration: Calibration | None = None,
     by_level: dict[float, list[float]] = {float(v): [] for v in group.levels}
     blocks: dict[float, list[TorqueRecord]] = {float(v): [] for v in group.levels}
     for r in group.results:
-        level = r.key.load_level
-        # a group's cases are done and were analysed over a block
-        assert level is not None and r.record is not None and r.analysis is not None
-        by_level[float(level)].append(r.energy)
-        blocks[float(level)].append(r.record.block(*r.analysis.block))
+        by_level[_level(r)].append(r.energy)
+        blocks[_level(r)].append(_block(r))
     levels = sorted(by_level)
     pairs = []
     for low, high in zip(levels, levels[1:], strict=False):
@@ -216,17 +229,192 @@ def discrimination(group: GroupAnalysis, calibration: Calibration | None = None,
                                lognormal))
     spreads = []
     for level in levels:
-        estimates, widths = [], []
-        for block in blocks[level]:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", NoIntervalWarning)
-                warnings.simplefilter("ignore", OutsideCalibrationWarning)
-                est = estimate_fill(block, calibration, confidence=confidence)
-            estimates.append(est.level)
-            widths.append(est.interval[1] - est.interval[0])
-        e = np.asarray(estimates)
+        estimates = [_estimate(block, calibration, confidence) for block in blocks[level]]
+        e = np.array([est.level for est in estimates])
         spreads.append(LevelSpread(level, e.size, float(e.mean()),
                                    float(e.std(ddof=1)) if e.size > 1 else math.nan,
-                                   float(np.mean(widths))))
-    sampling = str(group.results[0].case.settings.sampling)
-    return Discrimination(group.name, sampling, confidence, tuple(pairs), tuple(spreads))
+                                   float(np.mean([_width(est) for est in estimates]))))
+    return Discrimination(group.name, _sampling(group), confidence, tuple(pairs),
+                          tuple(spreads))
+
+
+@dataclass(frozen=True)
+class HeldOutLevel:
+    """The fill estimates of one level's blocks, each against a calibration that has not seen
+    its seed (:func:`held_out`).
+
+    Attributes
+    ----------
+    level : float
+        The true load level.
+    blocks : int
+        Blocks estimated (one a seed).
+    estimate_mean : float
+        Mean of the point estimates, load levels.
+    error_rms : float
+        Root mean square of estimate - true level over the blocks, load levels.
+    covered : int
+        Blocks whose prediction interval holds the true level (0 when no calibration gives an
+        interval).
+    interval_width : float
+        Mean width of the prediction intervals, load levels (nan when no calibration gives
+        one: a fit through 2 levels).
+    """
+
+    level: float
+    blocks: int
+    estimate_mean: float
+    error_rms: float
+    covered: int
+    interval_width: float
+
+
+@dataclass(frozen=True)
+class HeldOut:
+    """Each seed's blocks of a group estimated against a calibration of its other seeds
+    (:func:`held_out`): the out-of-sample fill estimate a plant's new block would get.
+
+    Attributes
+    ----------
+    group : str
+        The group's name, e.g. ``"LDMS-instant"``.
+    sampling : str
+        How its torque was sampled ("instant" or "mean").
+    confidence : float
+        Confidence of the prediction intervals.
+    seeds : tuple of int
+        The seeds held out in turn.
+    levels : tuple of HeldOutLevel
+        Per level, by rising level.
+    """
+
+    group: str
+    sampling: str
+    confidence: float
+    seeds: tuple[int, ...]
+    levels: tuple[HeldOutLevel, ...]
+
+    @property
+    def blocks(self) -> int:
+        """Blocks estimated, over all levels."""
+        return sum(s.blocks for s in self.levels)
+
+    @property
+    def covered(self) -> int:
+        """Blocks whose interval holds their true level, over all levels."""
+        return sum(s.covered for s in self.levels)
+
+    @property
+    def error_rms(self) -> float:
+        """Root mean square error of the estimates over all blocks, load levels."""
+        squares = sum(s.blocks * s.error_rms**2 for s in self.levels)
+        return math.sqrt(squares / self.blocks)
+
+    def to_markdown(self) -> str:
+        """A table of the held-out estimates per level, and a line for the coverage."""
+        percent = f"{100 * self.confidence:g} %"
+        lines = [f"**{self.group}, {self.sampling} samples, held out**: each seed's blocks "
+                 "against a calibration of the other seeds", "",
+                 f"| level | blocks | estimate | RMS error | inside the {percent} interval | "
+                 f"{percent} interval width |", "|---|---|---|---|---|---|"]
+        for s in self.levels:
+            lines.append(f"| {s.level:g} | {s.blocks} | {s.estimate_mean:.2f} | "
+                         f"{s.error_rms:.2f} | {s.covered} of {s.blocks} | "
+                         f"{_number(s.interval_width, '.2f')} |")
+        lines += ["", f"In all: {self.covered} of {self.blocks} true levels inside their "
+                      f"{percent} interval; RMS error {self.error_rms:.2f} load levels."]
+        return "\n".join(lines) + "\n"
+
+
+def held_out(group: GroupAnalysis, *, confidence: float = 0.95) -> HeldOut:
+    """Leave one seed out: each seed's blocks estimated against a calibration of the rest.
+
+    For each seed of the group in turn, its cases are set aside, the other seeds' cases are
+    analysed as a group (:func:`~millscope.campaign_analysis.analyze_campaign`) and calibrated
+    (:meth:`Calibration.from_group`), and each set-aside block's fill is estimated against that
+    calibration (:func:`~millscope.calibration.estimate_fill`). Unlike :func:`discrimination`,
+    no estimate comes from a calibration that has seen its block: the errors and the share of
+    true levels inside the intervals are those a new block would meet. With 2 seeds each
+    calibration has one case a level, so it is the calibration of a campaign without repeats.
+
+    Parameters
+    ----------
+    group : GroupAnalysis
+        A group of :func:`~millscope.campaign_analysis.analyze_campaign` with 2 or more seeds;
+        without each seed, 2 or more load levels must remain.
+    confidence : float
+        Of the prediction intervals, in (0, 1).
+
+    Returns
+    -------
+    HeldOut
+
+    Raises
+    ------
+    ValueError
+        when the group has fewer than 2 seeds, or without one of its seeds fewer than 2 load
+        levels; for a bad ``confidence``.
+    """
+    if not isinstance(group, GroupAnalysis):
+        raise _checks.fail("group", group, "a GroupAnalysis (millscope.analyze_campaign)")
+    confidence = _checks.number("confidence", confidence, ValueError, low=0.0, high=1.0,
+                                low_open=True, high_open=True)
+    seeds = sorted({_seed(r) for r in group.results})
+    if len(seeds) < 2:
+        raise _checks.fail("group", group.name, "a group with cases of 2 or more seeds")
+    estimates: dict[float, list[FillEstimate]] = {float(v): [] for v in group.levels}
+    for seed in seeds:
+        rest = [r for r in group.results if _seed(r) != seed]
+        if len({_level(r) for r in rest}) < 2:
+            raise _checks.fail("group", group.name, "a group whose cases of other seeds than "
+                               f"{seed} span 2 or more load levels")
+        (others,) = analyze_campaign(rest, bootstrap=0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NoIntervalWarning)  # 2 levels left: no interval
+            calibration = Calibration.from_group(others)
+        for r in group.results:
+            if _seed(r) == seed:
+                estimates[_level(r)].append(_estimate(_block(r), calibration, confidence))
+    levels = []
+    for level in sorted(estimates):
+        e = np.array([est.level for est in estimates[level]])
+        covered = sum(est.interval[0] <= level <= est.interval[1] for est in estimates[level])
+        levels.append(HeldOutLevel(level, e.size, float(e.mean()),
+                                   float(np.sqrt(np.mean((e - level) ** 2))), int(covered),
+                                   float(np.mean([_width(est) for est in estimates[level]]))))
+    return HeldOut(group.name, _sampling(group), confidence, tuple(seeds), tuple(levels))
+
+
+def _level(result: CaseResult) -> float:
+    """A group case's load level (a group's cases all have one)."""
+    level = result.key.load_level
+    assert level is not None
+    return float(level)
+
+
+def _seed(result: CaseResult) -> int:
+    return int(result.case.settings.seed)
+
+
+def _block(result: CaseResult) -> TorqueRecord:
+    """The block a group case was analysed over (a group's cases are done and analysed)."""
+    assert result.record is not None and result.analysis is not None
+    return result.record.block(*result.analysis.block)
+
+
+def _estimate(block: TorqueRecord, calibration: Calibration, confidence: float
+              ) -> FillEstimate:
+    """:func:`estimate_fill`, quiet: a 2-level calibration's missing interval and an estimate
+    outside the calibrated range are what the tables show, not news."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NoIntervalWarning)
+        warnings.simplefilter("ignore", OutsideCalibrationWarning)
+        return estimate_fill(block, calibration, confidence=confidence)
+
+
+def _width(estimate: FillEstimate) -> float:
+    return estimate.interval[1] - estimate.interval[0]
+
+
+def _sampling(group: GroupAnalysis) -> str:
+    return str(group.results[0].case.settings.sampling)

@@ -5,6 +5,9 @@ it (:func:`~millscope.campaign_analysis.analyze_campaign`) and writes into one f
 
 * ``report.md``: the campaign at a glance, the Table 6 analogue (log fits with bootstrap
   intervals), a table per group (per level: mean torque, LTH, energy per unit with its interval),
+  how well one block tells each level from the next
+  (:func:`~millscope.calibration.discrimination.discrimination`) and its fill estimates with
+  each seed held out of the calibration (:func:`~millscope.calibration.discrimination.held_out`),
   the cost of the runs per group, done and left (:func:`~millscope.campaign.costs.campaign_cost`),
   a table of every case, and the figures below;
 * ``fig09_torque.png`` (average torque per unit against filling), ``fig10_spectra_<group>.png``
@@ -36,7 +39,7 @@ from tqdm.auto import tqdm
 
 from .. import _core
 from .._files import atomic_write
-from ..calibration.discrimination import discrimination
+from ..calibration.discrimination import discrimination, held_out
 from ..calibration.fit import MIN_LEVELS_FOR_INTERVALS, Calibration, no_interval_reason
 from ..calibration.groups import GroupAnalysis, analyze_campaign, r2_text, table6_markdown
 from ..campaign.cases import CaseResult
@@ -191,6 +194,20 @@ def _figures(groups: list[GroupAnalysis]) -> list[_Figure]:
     if not any(g.lifters > 0 for g in groups):
         figs = [f for f in figs if f.file != "fig11_lth.png"]
     return figs
+
+
+def _held_out_section(g: GroupAnalysis, confidence: float) -> list[str]:
+    """The group's fill estimates with each seed held out of the calibration, or why there are
+    none (a campaign without repeats)."""
+    try:
+        result = held_out(g, confidence=confidence)
+    except ValueError as err:
+        return [f"No held-out estimates: {err}.", ""]
+    return [result.to_markdown(),
+            "Held out: each seed's blocks estimated against a calibration made from the other "
+            "seeds' cases alone, as a new block from the plant would be. The share of true "
+            "levels inside their intervals should be near the intervals' confidence; the RMS "
+            "error is the estimates' distance from the true level.", ""]
 
 
 def _group_table(g: GroupAnalysis) -> list[str]:
@@ -368,6 +385,7 @@ def write_report(store: str | os.PathLike[str], out: str | os.PathLike[str] | No
                       "the same from normal log energies, and each block's fill estimate "
                       "against the group's own calibration (which has seen the block, so the "
                       "estimates are optimistic; the interval widths are the method's).", ""]
+            lines += _held_out_section(g, confidence)
         if g.name in calibrations:
             lines += [f"Calibration: [`{calibrations[g.name]}`]({calibrations[g.name]}).", ""]
         elif g.fit is not None:
