@@ -575,7 +575,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "does: report.md, Table 6, Figs. 9-15 with the waterfall and "
                                    "the log fit, a calibration) with a section on the energy's "
                                    "fall with filling and a leave-one-out check. The "
-                                   "defaults take about 5 minutes on 2 cores.")
+                                   "defaults take about 2 minutes on 2 free cores.")
     p.add_argument("--out", default="out", help="output folder (default out)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--synthetic", action="store_true",

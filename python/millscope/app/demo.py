@@ -9,7 +9,7 @@ section (:func:`main_job_section`): the torque, spectrum and filtered signal of 
 level, whether the energy falls monotonically with the filling, and a leave-one-out check.
 The defaults (:class:`DemoPlan`) are the LDMS case (ceramic-like particles, 71 % of critical)
 at load levels 1..4 at the ``"tiny"`` scale, 8 s of rotation each of which the block 2-8 s is
-analysed: about 5 minutes on 2 free cores (README, "Two commands").
+analysed: about 2 minutes on 2 free cores (README, "Two commands").
 
 :func:`run_synthetic_demo` (``millscope demo --synthetic``) runs the same analysis in seconds on
 synthetic records whose energy law is known, so that the analysis can be seen to recover it.
@@ -77,8 +77,8 @@ class DemoPlan:
     ----------
     scale : str
         A scale of :data:`millscope.presets.SCALES`; ``"tiny"`` by default, the one that fits
-        four levels into about 5 minutes on 2 free cores (LDMS#1..#4: 1036 to 2970 particles;
-        580-600 s of CPU for the four cases' 8.7 simulated seconds each, settling included).
+        four levels into about 2 minutes on 2 free cores (LDMS#1..#4: 1036 to 2970 particles,
+        8 s of rotation each after the fill and settling).
     particles : {"ceramic", "steel"}
         Ceramic-like (LD) or steel-like (HD) particles to grind.
     speed_fraction : float
