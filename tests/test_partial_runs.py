@@ -379,3 +379,28 @@ def test_the_campaign_bar_shows_how_far_a_long_case_has_saved(tmp_path: Path) ->
         assert camp.run(slow, progress=False)[0].ok
     assert notes[0] == f"saved {100 * 12 / total:.0f} %"
     assert notes[-1] == ""  # the case is done: nothing under way
+
+
+def test_the_pace_of_a_case_under_way_gives_the_time_it_has_left() -> None:
+    """Shares seen at known times (a fake clock): the time left is the share still to run over
+    the pace since the first share seen, less the time since the last save, by hand."""
+    from millscope.campaign.partial import SavedPace
+
+    now = [0.0]
+    pace = SavedPace(clock=lambda: now[0])
+    seen = []
+    for t, share in [(0.0, 0.40), (300.0, 0.40), (600.0, 0.46), (900.0, 0.46), (1200.0, 0.52),
+                     (2400.0, 0.64), (6400.0, 0.97)]:
+        now[0] = t
+        seen.append((pace.left_s("a", share), pace.note("a", share)))
+    assert seen[0] == (None, "40 %") and seen[1] == (None, "40 %")  # no pace before 2 saves
+    # 6 % in 600 s: 1e-4 per s, 0.54 left: 5400 s; 300 s later, 5100 s
+    assert seen[2][0] == pytest.approx(5400.0) and seen[2][1] == "46 % (~1.5 h left)"
+    assert seen[3][0] == pytest.approx(5100.0)
+    assert seen[4][0] == pytest.approx(0.48 / 1e-4)  # 12 % in 1200 s
+    assert seen[5][0] == pytest.approx(0.36 / 1e-4)
+    # 57 % in 6400 s: 0.03 left at 8.906e-5 per s
+    assert seen[6][0] == pytest.approx(0.03 / (0.57 / 6400)) and seen[6][1] == "97 % (~6 min left)"
+    now[0] = 1e5  # long past the pace's end: nothing left, not a negative time
+    assert pace.left_s("a", 0.97) == 0.0
+    assert pace.left_s("b", 0.10) is None  # another case has its own start

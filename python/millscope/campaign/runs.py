@@ -72,7 +72,13 @@ from .executors import (
     _WorkerContext,
     run_case,
 )
-from .partial import CHECKPOINT_EVERY_S, PARTIAL_DIR, PartialFiles, saved_share
+from .partial import (
+    CHECKPOINT_EVERY_S,
+    PARTIAL_DIR,
+    PartialFiles,
+    SavedPace,
+    saved_share,
+)
 from .store import (
     _case_path,
     _entry,
@@ -499,9 +505,11 @@ class Campaign:
                     futures[executor.submit(run_case, self._cases[k].to_dict(), partial,
                                             checkpoint_every_s or 0.0)] = k
 
+                pace = SavedPace()
+
                 def tick() -> None:
                     running = [k for f, k in futures.items() if not f.done()]
-                    bar.set_postfix_str(self._bar_note(running, entries, partial),
+                    bar.set_postfix_str(self._bar_note(running, entries, partial, pace),
                                         refresh=False)
                     bar.refresh()
 
@@ -549,14 +557,18 @@ class Campaign:
         return [k for k in todo if k in waiting], carries
 
     def _bar_note(self, running: list[int], entries: Mapping[str, Mapping[str, Any]],
-                  partial: str | None) -> str:
+                  partial: str | None, pace: SavedPace) -> str:
         """The progress bar's note: the failed cases, and how far the cases under way are by
-        their last in-case checkpoints (a long case moves the bar only when it ends)."""
-        shares = [] if partial is None else [
-            saved_share(PartialFiles(Path(partial), self._hashes[k]),
-                        self._cases[k].settings.total_samples) for k in running]
+        their last in-case checkpoints, with the time they have left at their pace in this
+        sitting (a long case moves the bar only when it ends)."""
+        saved = []
+        for k in running:
+            digest = self._hashes[k]
+            share = None if partial is None else saved_share(
+                PartialFiles(Path(partial), digest), self._cases[k].settings.total_samples)
+            if share is not None:
+                saved.append(pace.note(digest, share))
         failed = sum(1 for d in self._hashes if entries[d]["status"] == "failed")
-        saved = [f"{100 * x:.0f} %" for x in shares if x is not None]
         notes = [f"failed={failed}"] if failed else []
         if saved:
             notes.append("saved " + ", ".join(saved))
