@@ -383,24 +383,27 @@ def test_the_campaign_bar_shows_how_far_a_long_case_has_saved(tmp_path: Path) ->
 
 def test_the_pace_of_a_case_under_way_gives_the_time_it_has_left() -> None:
     """Shares seen at known times (a fake clock): the time left is the share still to run over
-    the pace since the first share seen, less the time since the last save, by hand."""
+    the pace between the saves seen, less the time since the last save, worked by hand. The
+    share first seen (an older save, perhaps of a case still queued) starts no pace."""
     from millscope.campaign.partial import SavedPace
 
     now = [0.0]
     pace = SavedPace(clock=lambda: now[0])
     seen = []
-    for t, share in [(0.0, 0.40), (300.0, 0.40), (600.0, 0.46), (900.0, 0.46), (1200.0, 0.52),
-                     (2400.0, 0.64), (6400.0, 0.97)]:
+    for t, share in [(0.0, 0.40), (3000.0, 0.40), (3600.0, 0.46), (3900.0, 0.46),
+                     (4200.0, 0.52), (5400.0, 0.64), (9400.0, 0.97)]:
         now[0] = t
         seen.append((pace.left_s("a", share), pace.note("a", share)))
-    assert seen[0] == (None, "40 %") and seen[1] == (None, "40 %")  # no pace before 2 saves
-    # 6 % in 600 s: 1e-4 per s, 0.54 left: 5400 s; 300 s later, 5100 s
-    assert seen[2][0] == pytest.approx(5400.0) and seen[2][1] == "46 % (~1.5 h left)"
-    assert seen[3][0] == pytest.approx(5100.0)
-    assert seen[4][0] == pytest.approx(0.48 / 1e-4)  # 12 % in 1200 s
-    assert seen[5][0] == pytest.approx(0.36 / 1e-4)
-    # 57 % in 6400 s: 0.03 left at 8.906e-5 per s
-    assert seen[6][0] == pytest.approx(0.03 / (0.57 / 6400)) and seen[6][1] == "97 % (~6 min left)"
+    # the queue: no pace from 0.40, seen long before the case ran; one save: still none
+    assert [x[0] for x in seen[:4]] == [None] * 4
+    assert [x[1] for x in seen[:4]] == ["40 %", "40 %", "46 %", "46 %"]
+    # 6 % from 3600 s to 4200 s: 1e-4 per s, 0.48 left: 4800 s
+    assert seen[4][0] == pytest.approx(4800.0) and seen[4][1] == "52 % (~1.3 h left)"
+    assert seen[5][0] == pytest.approx(0.36 / 1e-4)  # 18 % in 1800 s
+    # 51 % in 5800 s: 0.03 left at 8.793e-5 per s
+    assert seen[6][0] == pytest.approx(0.03 / (0.51 / 5800)) and seen[6][1] == "97 % (~6 min left)"
+    now[0] = 9400.0 + 60.0  # a minute after the last save, a minute less
+    assert pace.left_s("a", 0.97) == pytest.approx(0.03 / (0.51 / 5800) - 60.0)
     now[0] = 1e5  # long past the pace's end: nothing left, not a negative time
     assert pace.left_s("a", 0.97) == 0.0
-    assert pace.left_s("b", 0.10) is None  # another case has its own start
+    assert pace.left_s("b", 0.10) is None  # another case has its own saves

@@ -197,10 +197,12 @@ class SavedPace:
     """How long the cases under way have left, from their saved shares seen over time.
 
     A case's share (:func:`saved_share`) moves only when its run saves, every
-    ``checkpoint_every_s`` s. The first share seen of a case, and when, is its start in this
-    sitting (a resumed run goes on from it); a later, larger share gives the pace since, and
-    the time left at that pace, less the time since that share was first seen. Before a case
-    has saved twice in the sitting there is no pace, and no time left to give.
+    ``checkpoint_every_s`` s. The pace of a case is taken between saves seen in this sitting:
+    from the first rise of its share seen (a save, seen within a tick of it) to the last. The
+    share first seen is not a start: a case resumed from an older save may wait in the queue
+    behind other cases before it runs. The time left is the share still to run at that pace,
+    less the time since the last save. Before a case has saved twice in the sitting there is
+    no pace, and no time left to give.
 
     Parameters
     ----------
@@ -210,21 +212,23 @@ class SavedPace:
 
     def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
         self._clock = clock
-        self._first: dict[str, tuple[float, float]] = {}
-        self._last: dict[str, tuple[float, float]] = {}
+        self._seen: dict[str, float] = {}  # the share last seen
+        self._saves: dict[str, list[tuple[float, float]]] = {}  # (time, share) at each rise
 
     def left_s(self, digest: str, share: float) -> float | None:
         """The wall-clock time case ``digest`` has left, s, at its pace so far in this sitting,
         given its saved share now; None while it has no pace."""
         now = self._clock()
-        first = self._first.setdefault(digest, (now, share))
-        last = self._last.get(digest)
-        if last is None or share > last[1]:
-            last = self._last[digest] = (now, share)
-        if last[1] <= first[1] or last[0] <= first[0]:
+        before = self._seen.setdefault(digest, share)
+        saves = self._saves.setdefault(digest, [])
+        if share > before:
+            self._seen[digest] = share
+            saves.append((now, share))
+        if len(saves) < 2:
             return None
-        rate = (last[1] - first[1]) / (last[0] - first[0])
-        return max(0.0, (1.0 - last[1]) / rate - (now - last[0]))
+        (t0, s0), (t1, s1) = saves[0], saves[-1]
+        rate = (s1 - s0) / (t1 - t0)
+        return max(0.0, (1.0 - s1) / rate - (now - t1))
 
     def note(self, digest: str, share: float) -> str:
         """The share for a progress note, with the time left once there is a pace:
