@@ -1,8 +1,8 @@
 // The engine's vector kernels (lane_kernels.hpp), compiled once per SIMD target by Google
 // Highway: foreach_target.h includes this file again for each target, and the kernels'
-// -inl headers define them in that target's namespace: the engine's pair search and contact
-// loop, chosen per engine (lane_kernels.hpp), and the list build's squared test
-// (neighbors::near_in_lanes), always in the widest lanes. Which targets: those that pay.
+// -inl headers define them in that target's namespace: the engine's pair search, contact
+// loop, kicks and drift, chosen per engine (lane_kernels.hpp), and the list build's squared
+// test (neighbors::near_in_lanes), always in the widest lanes. Which targets: those that pay.
 // - AVX-512 (Highway's AVX3) and AVX2: the wide search tests 8 or 4 listed pairs at once; the
 //   contact loop computes 4 contacts in one instruction (AVX-512 takes the AVX2 build:
 //   step/contact_lanes-inl.hpp).
@@ -34,6 +34,7 @@
 #include "lane_kernels.hpp"
 #include "near_in_lanes-inl.hpp"
 #include "step/contact_lanes-inl.hpp"
+#include "step/motion_lanes-inl.hpp"
 #include "touching_pairs-inl.hpp"
 
 HWY_BEFORE_NAMESPACE();
@@ -46,6 +47,12 @@ LaneKernels kernels_of_target() {
   for (int uniform = 0; uniform < 2; ++uniform) {  // null: the next narrower path's (make_paths)
     k.contact_forces[uniform] = contact_loop[uniform];
     k.wall_forces[uniform] = wall_loop[uniform];
+  }
+  for (int friction = 0; friction < 2; ++friction) {
+    k.half_kick[friction] = half_kick_loop[friction];
+    for (int periodic = 0; periodic < 2; ++periodic)
+      for (int guard = 0; guard < 2; ++guard)
+        k.kick_drift[friction][periodic][guard] = kick_drift_loop[friction][periodic][guard];
   }
 #if !(HWY_TARGET & (HWY_EMU128 | HWY_SCALAR))
   k.path.pair_lanes = hwy::HWY_NAMESPACE::Lanes(hwy::HWY_NAMESPACE::ScalableTag<double>());

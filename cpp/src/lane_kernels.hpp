@@ -9,6 +9,7 @@
 
 #include "millscope/engine.hpp"  // SimdPath, simd_paths
 #include "step/contact_lanes.hpp"
+#include "step/motion_lanes.hpp"
 #include "touching_pairs.hpp"
 
 namespace millscope::engine {
@@ -23,6 +24,9 @@ struct LaneKernels {
   /// (one material in use), which the loop then need not read lane by lane.
   ContactForcesInLanes contact_forces[2] = {};
   WallForcesInLanes wall_forces[2] = {};
+  /// The kicks and the drift (motion_lanes.hpp): [friction][periodic][guard] and [friction].
+  KickDriftInLanes kick_drift[2][2][2] = {};
+  HalfKickInLanes half_kick[2] = {};
 };
 
 /// The kernels of path `name`, as simd_path(name) chooses it.

@@ -104,6 +104,9 @@ struct Engine::Access::Step {
   // (Engine::wide_pair_search), asking ahead for the state of the partners where the data
   // exceed the caches.
   const LaneKernels& lanes;
+  // What the kicks and the drift read and write, for the SIMD path's loops.
+  MotionArrays motion;
+  DriftSettings drift;
   bool wide, prefetch;
   PartnerPrefetch ahead;
   // Two sets of per-thread partials, by step parity: step s writes set s % 2 while the threads
@@ -213,6 +216,11 @@ Engine::Access::Step<S>::Step(Engine& engine, StepObserver* obs)
       inv_i(engine.inv_i_.data()), mat(engine.mat_.data()),
       own{fx, fy, fz, tx, ty, tz, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr},
       lanes(*engine.lanes_),
+      motion{x,         y,         z,         vx,        vy,        vz,       wx,
+             wy,        wz,        fx,        fy,        fz,        tx,       ty,
+             tz,        inv_m,     inv_i,     engine.x_ref_.data(), engine.y_ref_.data(),
+             engine.z_ref_.data()},
+      drift{half_dt, dt, period, max_speed2, radius2},
       wide(in_lanes && engine.wide_pair_search()),
       prefetch(wide && engine.prefetch_partners()),
       ahead{{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m}},

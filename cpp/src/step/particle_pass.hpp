@@ -59,29 +59,24 @@ void Engine::Access::Step<S>::particle_pass(int t, double history_dt, bool kick,
         if (!sound(i)) part.bad = std::min(part.bad, i);
       continue;
     }
-    for (std::size_t i = c0; i < c1; ++i) {
-      const double kv = inv_m[i] * half_dt;
-      const double dvx = fx[i] * kv, dvy = fy[i] * kv, dvz = fz[i] * kv;
-      vx[i] += dvx;
-      vy[i] += dvy;
-      vz[i] += dvz;
-      [[maybe_unused]] double dwx = 0.0, dwy = 0.0, dwz = 0.0;
-      if constexpr (friction) {
-        const double kw = inv_i[i] * half_dt;
-        dwx = tx[i] * kw, dwy = ty[i] * kw, dwz = tz[i] * kw;
-        wx[i] += dwx;
-        wy[i] += dwy;
-        wz[i] += dwz;
-      }
-      // The dissipating forces worked against the half-step velocities above; what the
-      // integrator removes is their work with the full-step ones (Ledger::dissipated).
-      if constexpr (dissipates) {
+    // The dissipating forces worked against the half-step velocities; what the integrator
+    // removes is their work with the full-step ones (Ledger::dissipated): booked with the
+    // half kick's own increments, F (dt/2 / m) and T (dt/2 / I), before it.
+    if constexpr (dissipates) {
+      for (std::size_t i = c0; i < c1; ++i) {
+        const double kv = inv_m[i] * half_dt;
+        const Vec3 dv(fx[i] * kv, fy[i] * kv, fz[i] * kv);
+        Vec3 dw(0.0, 0.0, 0.0);
+        if constexpr (friction) {
+          const double kw = inv_i[i] * half_dt;
+          dw = Vec3(tx[i] * kw, ty[i] * kw, tz[i] * kw);
+        }
         const Vec3 diss = sums_of(6, i);
         const Vec3 diss_tq = friction ? sums_of(9, i) : Vec3(0.0, 0.0, 0.0);
-        part.dissipation_shift -=
-            (diss.dot(Vec3(dvx, dvy, dvz)) + diss_tq.dot(Vec3(dwx, dwy, dwz))) * dt;
+        part.dissipation_shift -= (diss.dot(dv) + diss_tq.dot(dw)) * dt;
       }
     }
+    lanes.half_kick[friction](motion, c0, c1, half_dt);  // motion_lanes-inl.hpp
   }
 }
 

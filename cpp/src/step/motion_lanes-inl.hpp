@@ -1,0 +1,135 @@
+// The loops of motion_lanes.hpp (the kicks and the drift), compiled for each SIMD target
+// lane_kernels.cpp names (foreach_target.h includes this file once per target): the compiler
+// moves several particles in the lanes of one instruction of that target. Every operation is
+// the scalar one, in the same order and unfused (-ffp-contract=off), so every target gives
+// the same bits. Not for other files.
+
+// Per-target include guard: Highway toggles HWY_TARGET_TOGGLE for each target it compiles.
+#if defined(MILLSCOPE_MOTION_LANES_INL_) == defined(HWY_TARGET_TOGGLE)
+#ifdef MILLSCOPE_MOTION_LANES_INL_
+#undef MILLSCOPE_MOTION_LANES_INL_
+#else
+#define MILLSCOPE_MOTION_LANES_INL_
+#endif
+
+#include <hwy/highway.h>
+
+#include <cmath>
+#include <cstddef>
+
+#include "step/motion_lanes.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace millscope::engine::HWY_NAMESPACE {
+
+/// KickDriftInLanes: the first half kick, v += (F / m) dt/2 (and w += (T / I) dt/2), then
+/// the drift x += v dt; with Periodic, z wraps into [0, period) and the move since the list
+/// build is taken to the nearest image. Returns the largest squared move and, with Guard,
+/// whether every new state passes the guard (speed^2 <= max_speed2, x^2 + y^2 <= radius2;
+/// NaN passes neither). The largest move is exact in any order (a maximum rounds nothing).
+template <bool Friction, bool Periodic, bool Guard>
+DriftFound kick_drift_in_lanes(const MotionArrays& a, std::size_t lo, std::size_t hi,
+                               const DriftSettings& s) {
+  double* __restrict x = a.x;
+  double* __restrict y = a.y;
+  double* __restrict z = a.z;
+  double* __restrict vx = a.vx;
+  double* __restrict vy = a.vy;
+  double* __restrict vz = a.vz;
+  double* __restrict wx = a.wx;
+  double* __restrict wy = a.wy;
+  double* __restrict wz = a.wz;
+  const double* __restrict fx = a.fx;
+  const double* __restrict fy = a.fy;
+  const double* __restrict fz = a.fz;
+  const double* __restrict tx = a.tx;
+  const double* __restrict ty = a.ty;
+  const double* __restrict tz = a.tz;
+  const double* __restrict inv_m = a.inv_m;
+  const double* __restrict inv_i = a.inv_i;
+  const float* __restrict x_ref = a.x_ref;
+  const float* __restrict y_ref = a.y_ref;
+  const float* __restrict z_ref = a.z_ref;
+  const double half_dt = s.half_dt, dt = s.dt, period = s.period;
+  const double max_speed2 = s.max_speed2, radius2 = s.radius2;
+  double move2 = 0.0;
+  int sound = 1;  // an int, which the lanes reduce with &
+#pragma omp simd reduction(max : move2) reduction(& : sound)
+  for (std::size_t i = lo; i < hi; ++i) {
+    const double vxi = vx[i] + fx[i] * inv_m[i] * half_dt;
+    const double vyi = vy[i] + fy[i] * inv_m[i] * half_dt;
+    const double vzi = vz[i] + fz[i] * inv_m[i] * half_dt;
+    vx[i] = vxi;
+    vy[i] = vyi;
+    vz[i] = vzi;
+    if constexpr (Friction) {
+      wx[i] += tx[i] * inv_i[i] * half_dt;
+      wy[i] += ty[i] * inv_i[i] * half_dt;
+      wz[i] += tz[i] * inv_i[i] * half_dt;
+    }
+    const double xi = x[i] + vxi * dt, yi = y[i] + vyi * dt;
+    double zi = z[i] + vzi * dt;
+    double dz = zi - static_cast<double>(z_ref[i]);
+    if constexpr (Periodic) {
+      zi -= period * std::floor(zi / period);
+      dz -= period * std::nearbyint(dz / period);
+    }
+    x[i] = xi;
+    y[i] = yi;
+    z[i] = zi;
+    const double dx = xi - static_cast<double>(x_ref[i]);
+    const double dy = yi - static_cast<double>(y_ref[i]);
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    move2 = move2 < d2 ? d2 : move2;
+    if constexpr (Guard)
+      sound &= static_cast<int>(vxi * vxi + vyi * vyi + vzi * vzi <= max_speed2) &
+               static_cast<int>(xi * xi + yi * yi <= radius2);
+  }
+  return DriftFound{move2, sound != 0};
+}
+
+/// HalfKickInLanes: the second half kick, v += F (dt/2 / m) (and w += T (dt/2 / I)).
+template <bool Friction>
+void half_kick_in_lanes(const MotionArrays& a, std::size_t lo, std::size_t hi, double half_dt) {
+  double* __restrict vx = a.vx;
+  double* __restrict vy = a.vy;
+  double* __restrict vz = a.vz;
+  double* __restrict wx = a.wx;
+  double* __restrict wy = a.wy;
+  double* __restrict wz = a.wz;
+  const double* __restrict fx = a.fx;
+  const double* __restrict fy = a.fy;
+  const double* __restrict fz = a.fz;
+  const double* __restrict tx = a.tx;
+  const double* __restrict ty = a.ty;
+  const double* __restrict tz = a.tz;
+  const double* __restrict inv_m = a.inv_m;
+  const double* __restrict inv_i = a.inv_i;
+#pragma omp simd
+  for (std::size_t i = lo; i < hi; ++i) {
+    const double kv = inv_m[i] * half_dt;
+    vx[i] += fx[i] * kv;
+    vy[i] += fy[i] * kv;
+    vz[i] += fz[i] * kv;
+    if constexpr (Friction) {
+      const double kw = inv_i[i] * half_dt;
+      wx[i] += tx[i] * kw;
+      wy[i] += ty[i] * kw;
+      wz[i] += tz[i] * kw;
+    }
+  }
+}
+
+/// This target's builds of the loops, indexed as LaneKernels holds them.
+inline constexpr KickDriftInLanes kick_drift_loop[2][2][2] = {
+    {{&kick_drift_in_lanes<false, false, false>, &kick_drift_in_lanes<false, false, true>},
+     {&kick_drift_in_lanes<false, true, false>, &kick_drift_in_lanes<false, true, true>}},
+    {{&kick_drift_in_lanes<true, false, false>, &kick_drift_in_lanes<true, false, true>},
+     {&kick_drift_in_lanes<true, true, false>, &kick_drift_in_lanes<true, true, true>}}};
+inline constexpr HalfKickInLanes half_kick_loop[2] = {&half_kick_in_lanes<false>,
+                                                      &half_kick_in_lanes<true>};
+
+}  // namespace millscope::engine::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#endif  // per-target include guard
