@@ -19,6 +19,11 @@ Make the two builds with pip, one folder each, at the two commits to compare::
 The checkpoint must be one both builds can read (the same millscope version). Each run loads it
 with the given thread count and times ``--steps`` steps with :func:`millscope.bench.measure`
 (the torque sampled as a user's run samples it), so loading is not timed.
+
+``--clock cpu`` divides by the process's CPU time over the stretch (all its threads) instead of
+the wall-clock time: where other processes share the cores, the time a run waits for a core
+then does not count, so the ratios scatter less. On several threads it counts the threads'
+waits at the barriers too, so compare thread counts by the wall clock.
 """
 
 from __future__ import annotations
@@ -39,9 +44,14 @@ import millscope
 from millscope import bench
 if not millscope.__file__.startswith(sys.argv[1]):
     sys.exit(f"millscope was imported from {millscope.__file__}, not from {sys.argv[1]}")
+import time
 sim = millscope.Simulation.load(sys.argv[2], threads=int(sys.argv[3]))
-print(bench.measure(sim, int(sys.argv[4])).particle_steps_per_s)
+cpu = time.process_time()
+timed = bench.measure(sim, int(sys.argv[4]))
+cpu = time.process_time() - cpu
+print(timed.particle_steps_per_s, timed.particle_steps / cpu)
 """
+CLOCKS = ("wall", "cpu")
 
 
 def _positive_int(name: str, least: int) -> Callable[[str], int]:
@@ -74,16 +84,27 @@ def _checkpoint(text: str) -> Path:
     return path
 
 
+def _clock(text: str) -> str:
+    if text not in CLOCKS:
+        raise argparse.ArgumentTypeError(f"clock = {text!r} is not valid; it must be one of "
+                                         + ", ".join(repr(c) for c in CLOCKS))
+    return text
+
+
 def time_run(build: Path, checkpoint: Path, threads: int, steps: int,
-             env: dict[str, str] | None = None) -> float:
+             env: dict[str, str] | None = None, clock: str = "wall") -> float:
     """Particle-steps per second of one run of ``build`` from ``checkpoint``, with ``env`` added
-    to this process's environment (for instance MILLSCOPE_SIMD)."""
+    to this process's environment (for instance MILLSCOPE_SIMD): per second of wall-clock time,
+    or with ``clock="cpu"`` per second of the process's CPU time."""
+    # OMP_NUM_THREADS too, so that no OpenMP region of the run starts more threads than asked
+    # for (idle ones spin for a while, which the CPU clock would count)
     out = subprocess.run([sys.executable, "-c", _RUN, str(build), str(checkpoint), str(threads),
                           str(steps)], capture_output=True, text=True,
-                         env=None if env is None else {**os.environ, **env})
+                         env={**os.environ, "OMP_NUM_THREADS": str(threads), **(env or {})})
     if out.returncode != 0:
         raise RuntimeError(f"the run of the build in {build} failed:\n{out.stderr.strip()}")
-    return float(out.stdout.strip().splitlines()[-1])
+    wall_rate, cpu_rate = (float(v) for v in out.stdout.strip().splitlines()[-1].split())
+    return cpu_rate if clock == "cpu" else wall_rate
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -97,6 +118,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help="timed steps of each run (default 2000)")
     parser.add_argument("--pairs", type=_positive_int("pairs", 1), default=6,
                         help="alternating pairs of runs (default 6)")
+    parser.add_argument("--clock", type=_clock, default="wall",
+                        help="time each run by the wall clock or by the process's CPU time "
+                             "(wall or cpu; default wall)")
     args = parser.parse_args(argv)
 
     a_runs: list[float] = []
@@ -104,12 +128,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     for k in range(args.pairs):
         order = ((args.build_a, a_runs), (args.build_b, b_runs))
         for build, runs in order if k % 2 == 0 else order[::-1]:
-            runs.append(time_run(build, args.checkpoint, args.threads, args.steps))
+            runs.append(time_run(build, args.checkpoint, args.threads, args.steps,
+                                 clock=args.clock))
         print(f"pair {k + 1}: A {a_runs[-1]:.4e}  B {b_runs[-1]:.4e}  particle-steps/s  "
               f"B/A {b_runs[-1] / a_runs[-1]:.3f}", flush=True)
     ratios = [b / a for a, b in zip(a_runs, b_runs, strict=True)]
     print(f"A median {statistics.median(a_runs):.4e}, B median {statistics.median(b_runs):.4e} "
-          f"particle-steps/s ({args.threads} thread(s), {args.steps} steps a run)")
+          f"particle-steps/s ({args.threads} thread(s), {args.steps} steps a run, "
+          f"{args.clock} clock)")
     print(f"B/A: median {statistics.median(ratios):.3f}, min {min(ratios):.3f}, "
           f"max {max(ratios):.3f}")
     return 0

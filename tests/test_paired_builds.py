@@ -33,8 +33,11 @@ def checkpoint(tmp_path_factory: pytest.TempPathFactory) -> Path:
                                 threads=1, progress=False, out=io.StringIO())
 
 
-def test_every_pair_is_run_and_its_ratio_is_that_of_its_figures(checkpoint: Path) -> None:
-    out = _run(str(checkpoint), str(BUILD), str(BUILD), "--steps", "50", "--pairs", "3")
+@pytest.mark.parametrize("clock", ["wall", "cpu"])
+def test_every_pair_is_run_and_its_ratio_is_that_of_its_figures(checkpoint: Path,
+                                                                clock: str) -> None:
+    out = _run(str(checkpoint), str(BUILD), str(BUILD), "--steps", "50", "--pairs", "3",
+               "--clock", clock)
     assert out.returncode == 0, out.stderr
     pairs = re.findall(r"^pair (\d+): A (\S+)  B (\S+)  particle-steps/s  B/A (\S+)$",
                        out.stdout, re.MULTILINE)
@@ -53,6 +56,8 @@ def test_every_pair_is_run_and_its_ratio_is_that_of_its_figures(checkpoint: Path
     (["{ckpt}", "{build}", "{build}", "--steps", "1"], "steps = '1' is not valid"),
     (["{ckpt}", "{build}", "{build}", "--pairs", "0"], "pairs = '0' is not valid"),
     (["{ckpt}", "{build}", "{build}", "--threads", "x"], "threads = 'x' is not valid"),
+    (["{ckpt}", "{build}", "{build}", "--clock", "sun"],
+     "clock = 'sun' is not valid; it must be one of 'wall', 'cpu'"),
 ])
 def test_bad_input_is_refused_with_the_parameter_and_its_range(
         checkpoint: Path, args: list[str], message: str) -> None:
@@ -60,3 +65,4 @@ def test_bad_input_is_refused_with_the_parameter_and_its_range(
     assert out.returncode == 2
     assert message in out.stderr
     assert "pair 1" not in out.stdout  # nothing ran
+
