@@ -30,55 +30,38 @@ namespace millscope::engine::HWY_NAMESPACE {
 template <bool Friction, bool Periodic, bool Guard>
 DriftFound kick_drift_in_lanes(const MotionArrays& a, std::size_t lo, std::size_t hi,
                                const DriftSettings& s) {
-  double* __restrict x = a.x;
-  double* __restrict y = a.y;
-  double* __restrict z = a.z;
-  double* __restrict vx = a.vx;
-  double* __restrict vy = a.vy;
-  double* __restrict vz = a.vz;
-  double* __restrict wx = a.wx;
-  double* __restrict wy = a.wy;
-  double* __restrict wz = a.wz;
-  const double* __restrict fx = a.fx;
-  const double* __restrict fy = a.fy;
-  const double* __restrict fz = a.fz;
-  const double* __restrict tx = a.tx;
-  const double* __restrict ty = a.ty;
-  const double* __restrict tz = a.tz;
-  const double* __restrict inv_m = a.inv_m;
-  const double* __restrict inv_i = a.inv_i;
-  const float* __restrict x_ref = a.x_ref;
-  const float* __restrict y_ref = a.y_ref;
-  const float* __restrict z_ref = a.z_ref;
+  // A copy: the loop's stores (doubles) cannot move its pointers, so they stay in registers;
+  // `omp simd` says that the arrays' lanes do not depend on one another.
+  const MotionArrays m = a;
   const double half_dt = s.half_dt, dt = s.dt, period = s.period;
   const double max_speed2 = s.max_speed2, radius2 = s.radius2;
   double move2 = 0.0;
   int sound = 1;  // an int, which the lanes reduce with &
 #pragma omp simd reduction(max : move2) reduction(& : sound)
   for (std::size_t i = lo; i < hi; ++i) {
-    const double vxi = vx[i] + fx[i] * inv_m[i] * half_dt;
-    const double vyi = vy[i] + fy[i] * inv_m[i] * half_dt;
-    const double vzi = vz[i] + fz[i] * inv_m[i] * half_dt;
-    vx[i] = vxi;
-    vy[i] = vyi;
-    vz[i] = vzi;
+    const double vxi = m.vx[i] + m.fx[i] * m.inv_m[i] * half_dt;
+    const double vyi = m.vy[i] + m.fy[i] * m.inv_m[i] * half_dt;
+    const double vzi = m.vz[i] + m.fz[i] * m.inv_m[i] * half_dt;
+    m.vx[i] = vxi;
+    m.vy[i] = vyi;
+    m.vz[i] = vzi;
     if constexpr (Friction) {
-      wx[i] += tx[i] * inv_i[i] * half_dt;
-      wy[i] += ty[i] * inv_i[i] * half_dt;
-      wz[i] += tz[i] * inv_i[i] * half_dt;
+      m.wx[i] += m.tx[i] * m.inv_i[i] * half_dt;
+      m.wy[i] += m.ty[i] * m.inv_i[i] * half_dt;
+      m.wz[i] += m.tz[i] * m.inv_i[i] * half_dt;
     }
-    const double xi = x[i] + vxi * dt, yi = y[i] + vyi * dt;
-    double zi = z[i] + vzi * dt;
-    double dz = zi - static_cast<double>(z_ref[i]);
+    const double xi = m.x[i] + vxi * dt, yi = m.y[i] + vyi * dt;
+    double zi = m.z[i] + vzi * dt;
+    double dz = zi - static_cast<double>(m.z_ref[i]);
     if constexpr (Periodic) {
       zi -= period * std::floor(zi / period);
       dz -= period * std::nearbyint(dz / period);
     }
-    x[i] = xi;
-    y[i] = yi;
-    z[i] = zi;
-    const double dx = xi - static_cast<double>(x_ref[i]);
-    const double dy = yi - static_cast<double>(y_ref[i]);
+    m.x[i] = xi;
+    m.y[i] = yi;
+    m.z[i] = zi;
+    const double dx = xi - static_cast<double>(m.x_ref[i]);
+    const double dy = yi - static_cast<double>(m.y_ref[i]);
     const double d2 = dx * dx + dy * dy + dz * dz;
     move2 = move2 < d2 ? d2 : move2;
     if constexpr (Guard)
@@ -91,31 +74,18 @@ DriftFound kick_drift_in_lanes(const MotionArrays& a, std::size_t lo, std::size_
 /// HalfKickInLanes: the second half kick, v += F (dt/2 / m) (and w += T (dt/2 / I)).
 template <bool Friction>
 void half_kick_in_lanes(const MotionArrays& a, std::size_t lo, std::size_t hi, double half_dt) {
-  double* __restrict vx = a.vx;
-  double* __restrict vy = a.vy;
-  double* __restrict vz = a.vz;
-  double* __restrict wx = a.wx;
-  double* __restrict wy = a.wy;
-  double* __restrict wz = a.wz;
-  const double* __restrict fx = a.fx;
-  const double* __restrict fy = a.fy;
-  const double* __restrict fz = a.fz;
-  const double* __restrict tx = a.tx;
-  const double* __restrict ty = a.ty;
-  const double* __restrict tz = a.tz;
-  const double* __restrict inv_m = a.inv_m;
-  const double* __restrict inv_i = a.inv_i;
+  const MotionArrays m = a;  // as in kick_drift_in_lanes
 #pragma omp simd
   for (std::size_t i = lo; i < hi; ++i) {
-    const double kv = inv_m[i] * half_dt;
-    vx[i] += fx[i] * kv;
-    vy[i] += fy[i] * kv;
-    vz[i] += fz[i] * kv;
+    const double kv = m.inv_m[i] * half_dt;
+    m.vx[i] += m.fx[i] * kv;
+    m.vy[i] += m.fy[i] * kv;
+    m.vz[i] += m.fz[i] * kv;
     if constexpr (Friction) {
-      const double kw = inv_i[i] * half_dt;
-      wx[i] += tx[i] * kw;
-      wy[i] += ty[i] * kw;
-      wz[i] += tz[i] * kw;
+      const double kw = m.inv_i[i] * half_dt;
+      m.wx[i] += m.tx[i] * kw;
+      m.wy[i] += m.ty[i] * kw;
+      m.wz[i] += m.tz[i] * kw;
     }
   }
 }
