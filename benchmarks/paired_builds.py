@@ -22,8 +22,10 @@ with the given thread count and times ``--steps`` steps with :func:`millscope.be
 
 ``--clock cpu`` divides by the process's CPU time over the stretch (all its threads) instead of
 the wall-clock time: where other processes share the cores, the time a run waits for a core
-then does not count, so the ratios scatter less. On several threads it counts the threads'
-waits at the barriers too, so compare thread counts by the wall clock.
+then does not count. What they do to the caches still counts, and on a shared VM the ratios
+may scatter as much by either clock: compare medians of several pairs. On several threads the
+CPU time counts the threads' waits at the barriers too, so compare thread counts by the wall
+clock.
 """
 
 from __future__ import annotations
