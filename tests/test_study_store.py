@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from millscope.app.case_files import load_campaign
-from millscope.calibration.groups import analyze_campaign
 from millscope.app.cli import build_parser, main
+from millscope.calibration.groups import analyze_campaign
 from millscope.campaign import Campaign
 from millscope.campaign.studies import (
     PLAN_FILE,
@@ -33,8 +33,8 @@ from millscope.campaign.studies import (
 from millscope.model.presets import SCALE_BIAS, ScaleBias, measured_bias, pilot_mill
 from millscope.report.plots import PAPER_TORQUE_CHANGE, torque_change
 from millscope.report.reports import write_study
-from millscope.signal.synthetic import PAPER_TABLE_6
 from millscope.signal.record import TorqueRecord
+from millscope.signal.synthetic import PAPER_TABLE_6
 
 from .test_studies import SHORT, _fake_runs
 
