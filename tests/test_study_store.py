@@ -356,9 +356,7 @@ def test_the_committed_paper_campaign_stands_beside_the_papers_table_6_and_fig_9
     changes by less than Fig. 9's 9 % across the levels, in both modes."""
     root = Path(__file__).resolve().parents[1]
     monkeypatch.chdir(root)
-    plan = load_campaign("data/paper-campaign/campaign.toml")
-    camp = Campaign(plan.campaign.cases, root / "data/paper-campaign/store",
-                    block=plan.campaign.block)
+    camp = load_campaign("data/paper-campaign/campaign.toml").campaign  # on its store
     results = camp.results()
     assert len(results) == len(camp) == 28 and all(r.ok for r in results)
     groups = {g.name: g for g in analyze_campaign(results, bootstrap=0)}
