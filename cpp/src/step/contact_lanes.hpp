@@ -21,17 +21,17 @@ struct ContactBatch {
   static constexpr std::size_t max_rows = 128;     // ... or this many rows
   std::size_t size = 0;
   std::vector<std::uint32_t> i, j, slot, pair;  // rows, partners, list slots, pair constants
+                                                // (pair: not set with one material)
   std::vector<double> dx, dy, dz;               // x_i - x_j, m
   std::vector<double> sx, sy, sz;               // tangential spring d_t, m: in, then out
   std::vector<double> overlap;                  // d_n = r_i + r_j - |x_i - x_j|, m
   std::vector<double> fx, fy, fz;               // force on i, N
   std::vector<double> tix, tiy, tiz, tjx, tjy, tjz;  // torques on i and on j, N m
-  std::vector<double> row_sum;  // force, N, and torque, N m, on each row's particle: 6 a row
 
   // The wide search's scratch (touching_pairs.hpp): each listed pair's row.
   std::vector<std::uint32_t> slot_row;
 
-  ContactBatch() : row_sum(6 * max_rows) {
+  ContactBatch() {
     reserve(4 * max_contacts);
     reserve_listed(wide_block_listed);
   }

@@ -18,21 +18,31 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
   double* const history = e.list_.history().data();
   const double* const touch2 = e.touch_dist2_.data();
   static_assert(!in_lanes || hs == 3, "the lanes carry the spring d_t, 3 doubles");
-  // 3. The springs back, and the sums: those on j straight into j, those on i into the
-  // block's row sums, added to i last. As in the portable pass, to the bit: i receives from
-  // the rows before it (j > i in a half list), then its own row's sum.
-  auto sum_block = [&](ContactBatch& b, std::size_t block, std::size_t block_end) {
-    double* const row_sum = b.row_sum.data();  // 6 per row of the block
-    std::fill(row_sum, row_sum + 6 * (block_end - block), 0.0);
+  // 3. The springs back, and the sums: those on j straight into j, those on i into the row's
+  // sums (in registers while the batch is on row i), added to i when the batch leaves its row.
+  // As in the portable pass, to the bit: i receives from the rows before it (j > i in a half
+  // list, so all of that is in by the time row i begins), then its own row's sum. A row with
+  // no touching pair adds nothing: its sum would be +0.0, and a sum that starts at +0.0 and
+  // only adds never becomes -0.0, so adding +0.0 would change no bit.
+  auto sum_block = [&](ContactBatch& b) {
+    std::size_t row = 0;
+    double sum_i[6] = {};
+    const auto close_row = [&] {
+      for (std::size_t q = 0; q < 6; ++q) own[q][row] += sum_i[q];
+    };
     for (std::size_t c = 0; c < b.size; ++c) {
       const std::size_t i = b.i[c], j = b.j[c];
+      if (c == 0 || i != row) {
+        if (c > 0) close_row();
+        row = i;
+        for (double& v : sum_i) v = 0.0;
+      }
       double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
       hist[0] = b.sx[c], hist[1] = b.sy[c], hist[2] = b.sz[c];
       const double r_min = std::min(r[i], r[j]), overlap = b.overlap[c];
       if (overlap > max_overlap * r_min) part.note_overlap(i, overlap / r_min, false);
       const double on_i[6] = {b.fx[c], b.fy[c], b.fz[c], b.tix[c], b.tiy[c], b.tiz[c]};
       const double on_j[6] = {-b.fx[c], -b.fy[c], -b.fz[c], b.tjx[c], b.tjy[c], b.tjz[c]};
-      double* const sum_i = row_sum + 6 * (i - block);
       const bool j_own = j < own_end;
       const std::size_t k = j_own ? j : j - own_end;
       double* const* const dst = j_own ? own : buffered;
@@ -41,8 +51,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
         dst[q][k] += on_j[q];
       }
     }
-    for (std::size_t i = block; i < block_end; ++i)
-      for (std::size_t q = 0; q < 6; ++q) own[q][i] += row_sum[6 * (i - block) + q];
+    if (b.size > 0) close_row();
   };
   ContactBatch& b = *batches[static_cast<std::size_t>(t)];
   const materials::PairConstants* const pairs = lane_pairs();
@@ -65,7 +74,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
       for (std::size_t c = 0; c < b.size; ++c) {
         const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
         b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
-        b.pair[c] = lane_pair(mat[b.i[c]], mat[b.j[c]]);
+        if constexpr (!OneMaterial) b.pair[c] = lane_pair(mat[b.i[c]], mat[b.j[c]]);
       }
       // A listed pair that does not touch has its history cleared; those that touch get
       // theirs back in phase 3.
@@ -73,7 +82,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
                 history + static_cast<std::size_t>(s1) * hs, 0.0);
       // 2. Their forces, several at a time.
       lanes.contact_forces[OneMaterial](b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
-      sum_block(b, block, block_end);
+      sum_block(b);
       block = block_end;
     }
     return;
@@ -102,7 +111,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
         b.i[c] = static_cast<std::uint32_t>(i);
         b.j[c] = static_cast<std::uint32_t>(j);
         b.slot[c] = s;
-        b.pair[c] = lane_pair(mat[i], mat[j]);
+        if constexpr (!OneMaterial) b.pair[c] = lane_pair(mat[i], mat[j]);
         b.dx[c] = dx, b.dy[c] = dy, b.dz[c] = dz;
         b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
       }
@@ -110,7 +119,7 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
     }
     // 2. Their forces, several at a time.
     lanes.contact_forces[OneMaterial](b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
-    sum_block(b, block, block_end);
+    sum_block(b);
     block = block_end;
   }
 }
