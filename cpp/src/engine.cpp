@@ -35,6 +35,9 @@ constexpr double touching_pair_cost = 6.0;  // in listed pairs that do not touch
 // times one that is not (its wall law and torque). A finer model (by the distance to the shell)
 // moves the cut by about 1 % of the cost, too little to be worth its complexity.
 constexpr double drum_contact_cost = 3.0;  // in particles not in contact with it
+// The gap within which a listed pair counts as near (src/step/near_pairs.hpp) at first, as a
+// fraction of the skin; the step loop then adapts it to the scene (run.hpp).
+constexpr double near_gap_fraction = 0.25;
 
 /// Boundaries 0 = split[0] <= split[1] <= ... <= split[team] = n cutting items 0..n-1 into team
 /// contiguous blocks of about equal cost (cost[i] >= 0): block t is [split[t], split[t+1]),
@@ -230,6 +233,7 @@ Engine::Engine(Config config)
   const bool friction = has_friction(variant_);
   list_ = neighbors::VerletList(list_.skin(), contact::history_size(variant_.law),
                                 config_.geometry.end_walls ? 0.0 : config_.geometry.length);
+  near_gap_ = near_gap_fraction * list_.skin();
 
   for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_, &ty_,
                   &tz_})
@@ -278,6 +282,7 @@ double Engine::bytes_per_particle() const {
            bytes(order_) + bytes(lifter_reach_);
   for (const auto& b : buffers_) total += bytes(b);
   total += static_cast<double>(list_.bytes()) + bytes(list_moved_) + bytes(touch_dist2_) +
+           bytes(near_dist2_) +
            bytes(row_split_) + bytes(particle_split_) + bytes(buffer_end_);
   return total / static_cast<double>(n_);
 }
@@ -767,6 +772,7 @@ void Engine::Access::list_touch_distances(Engine& e) {
   const auto& start = e.list_.start();
   const auto& partner = e.list_.partner();
   e.touch_dist2_.assign(partner.size() + max_search_lanes, 0.0);
+  e.near_dist2_.assign(partner.size() + max_search_lanes, 0.0);  // set by the wide search
   for (std::size_t i = 0; i + 1 < start.size(); ++i) {
     for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
       const double r_sum = e.r_[i] + e.r_[partner[s]];

@@ -58,8 +58,10 @@ LaneKernels kernels_of_target() {
   k.path.pair_lanes = hwy::HWY_NAMESPACE::Lanes(hwy::HWY_NAMESPACE::ScalableTag<double>());
   const WideSearches wide;
   for (int periodic = 0; periodic < 2; ++periodic)
-    for (int prefetch = 0; prefetch < 2; ++prefetch)
+    for (int prefetch = 0; prefetch < 2; ++prefetch) {
       k.touching_pairs[periodic][prefetch] = wide.of[periodic][prefetch];
+      k.touching_entries[periodic][prefetch] = wide.entries[periodic][prefetch];
+    }
 #endif
   return k;
 }
@@ -98,6 +100,7 @@ std::vector<LaneKernels> make_paths() {
   LaneKernels portable = HWY_STATIC_DISPATCH(kernels_of_target)();
   portable.path = SimdPath{"portable", 1};
   for (auto& row : portable.touching_pairs) row[0] = row[1] = nullptr;
+  for (auto& row : portable.touching_entries) row[0] = row[1] = nullptr;
   paths.push_back(portable);
   for (std::size_t p = paths.size() - 1; p-- > 0;) {
     for (int uniform = 0; uniform < 2; ++uniform) {

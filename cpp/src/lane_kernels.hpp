@@ -19,6 +19,8 @@ struct LaneKernels {
   SimdPath path;
   /// The wide search (touching_pairs.hpp), [periodic][prefetch]; null for the portable search.
   TouchingPairsSearch touching_pairs[2][2] = {};
+  /// ... and over packed pairs (the near pairs), [periodic][prefetch]; null with the other.
+  TouchingEntriesSearch touching_entries[2][2] = {};
   /// The paper's law for a block of contacts, and for a chunk's contacts with the drum
   /// (contact_lanes.hpp), [uniform]: [1] where every contact has the pair constants pairs[0]
   /// (one material in use), which the loop then need not read lane by lane.

@@ -82,6 +82,64 @@ HWY_INLINE void pack_store(D d, hn::Vec<D> v, hn::Mask<D> m, const std::uint8_t*
   }
 }
 
+/// Tests N = Lanes(d) pairs at once, rows i and partners j (the lanes past `live` are not
+/// kept), and packs those that touch at out[size..]: row, partner, slot and x_i - x_j.
+/// touch2 holds each pair's (r_i + r_j)^2. Returns how many touched.
+template <bool Periodic, class D, class DU>
+HWY_INLINE std::size_t test_and_pack(D d, DU du, hn::Vec<DU> rows, hn::Vec<DU> j,
+                                     hn::Vec<DU> slots, hn::Vec<D> touch2, hn::Mask<D> live,
+                                     const double* x, const double* y, const double* z,
+                                     std::size_t n, hn::Vec<D> per, const TouchingPairs& out,
+                                     std::size_t size) {
+  const hn::RebindToUnsigned<D> du64;  // the indices, widened for the gathers
+  const hn::RebindToSigned<D> di64;
+  const std::size_t lanes = hn::Lanes(d);
+  const auto window = hn::Set(du, static_cast<std::uint32_t>(lanes));
+  // The rows' values. A list row's partners follow it closely, so N pairs mostly belong to
+  // rows within N particles of the first: one load and a permute. Else (empty rows between
+  // them, or the array's end) a gather. Lanes past `live` hold the first lane's row.
+  const std::uint32_t base = hn::GetLane(rows);
+  const auto base_v = hn::Set(du, base);
+  const auto rel = hn::Sub(rows, base_v);
+  hn::Vec<D> xi, yi, zi;
+  if (base + lanes <= n && hn::AllTrue(du, hn::Lt(rel, window))) {
+    const auto idx = hn::IndicesFromVec(d, hn::BitCast(di64, hn::PromoteTo(du64, rel)));
+    xi = hn::TableLookupLanes(hn::LoadU(d, x + base), idx);
+    yi = hn::TableLookupLanes(hn::LoadU(d, y + base), idx);
+    zi = hn::TableLookupLanes(hn::LoadU(d, z + base), idx);
+  } else {
+    const auto idx = hn::BitCast(di64, hn::PromoteTo(du64, rows));
+    xi = hn::GatherIndex(d, x, idx);
+    yi = hn::GatherIndex(d, y, idx);
+    zi = hn::GatherIndex(d, z, idx);
+  }
+  const auto jdx = hn::BitCast(di64, hn::PromoteTo(du64, j));
+  const auto xj = hn::GatherIndex(d, x, jdx);
+  const auto yj = hn::GatherIndex(d, y, jdx);
+  const auto zj = hn::GatherIndex(d, z, jdx);
+  const auto dx = hn::Sub(xi, xj);
+  const auto dy = hn::Sub(yi, yj);
+  auto dz = hn::Sub(zi, zj);
+  if constexpr (Periodic) {  // the nearest image: Round is nearbyint in the default mode
+    dz = hn::Sub(dz, hn::Mul(per, hn::Round(hn::Div(dz, per))));
+  }
+  // Touching: dx^2 + dy^2 + dz^2 < (r_i + r_j)^2, summed left to right as the portable
+  // search does; a NaN does not touch.
+  const auto d2 = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
+  const auto touch = hn::And(live, hn::Lt(d2, touch2));
+  // The index vectors have lanes half as wide as the doubles: they take the mask as bits.
+  std::uint8_t bits[(max_search_lanes + 7) / 8];
+  hn::StoreMaskBits(d, touch, bits);
+  const auto touch_u = hn::LoadMaskBits(du, bits);  // the same mask, in the index lanes
+  pack_store(du, rows, touch_u, bits, out.i + size);
+  pack_store(du, j, touch_u, bits, out.j + size);
+  pack_store(du, slots, touch_u, bits, out.slot + size);
+  pack_store(d, dx, touch, bits, out.dx + size);
+  pack_store(d, dy, touch, bits, out.dy + size);
+  pack_store(d, dz, touch, bits, out.dz + size);
+  return hn::CountTrue(d, touch);
+}
+
 /// The wide search (touching_pairs.hpp, TouchingPairsSearch), N = Lanes(d) listed pairs at a
 /// time.
 template <bool Periodic, bool Prefetch>
@@ -91,10 +149,8 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
                                 const double* touch2, std::size_t n, double period,
                                 std::uint32_t* slot_row, const TouchingPairs& out,
                                 const PartnerPrefetch& ahead) {
-  const hn::ScalableTag<double> d;             // the positions, N lanes
+  const hn::ScalableTag<double> d;                  // the positions, N lanes
   const hn::Rebind<std::uint32_t, decltype(d)> du;  // the indices, as many lanes
-  const hn::RebindToUnsigned<decltype(d)> du64;     // ... widened for the gathers
-  const hn::RebindToSigned<decltype(d)> di64;
   const std::size_t lanes = hn::Lanes(d);
   const std::uint32_t s0 = start[first_row];
   const std::uint32_t listed = start[end_row] - s0;
@@ -110,7 +166,6 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
   }
   const auto per = hn::Set(d, period);
   const auto lane = hn::Iota(du, 0);
-  const auto window = hn::Set(du, static_cast<std::uint32_t>(lanes));
   std::size_t size = 0;
   // All listed pairs, read once: the stores to `out` below may alias `start` for the compiler.
   [[maybe_unused]] const std::uint32_t listed_all = start[n];
@@ -129,69 +184,59 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
       }
     }
     const std::size_t live_count = std::min<std::size_t>(lanes, listed - s);
-    const auto live = hn::FirstN(d, live_count);
     const std::uint32_t* js = partner + s0 + s;
     if (live_count < lanes) {
       std::copy(js, js + live_count, tail);
       js = tail;
     }
-    const auto j = hn::LoadU(du, js);
-    // The rows' values. A list row's partners follow it closely, so N listed pairs mostly
-    // belong to rows within N particles of the first: one load and a permute. Else (empty
-    // rows between them, or the array's end) a gather. Lanes past the block's end take the
-    // first lane's row.
-    const std::uint32_t base = slot_row[s];
-    const auto base_v = hn::Set(du, base);
     const auto rows = hn::IfThenElse(hn::FirstN(du, live_count), hn::LoadU(du, slot_row + s),
-                                     base_v);
-    const auto rel = hn::Sub(rows, base_v);
-    hn::Vec<decltype(d)> xi, yi, zi;
-    if (base + lanes <= n && hn::AllTrue(du, hn::Lt(rel, window))) {
-      const auto idx = hn::IndicesFromVec(d, hn::BitCast(di64, hn::PromoteTo(du64, rel)));
-      xi = hn::TableLookupLanes(hn::LoadU(d, x + base), idx);
-      yi = hn::TableLookupLanes(hn::LoadU(d, y + base), idx);
-      zi = hn::TableLookupLanes(hn::LoadU(d, z + base), idx);
-    } else {
-      const auto idx = hn::BitCast(di64, hn::PromoteTo(du64, rows));
-      xi = hn::GatherIndex(d, x, idx);
-      yi = hn::GatherIndex(d, y, idx);
-      zi = hn::GatherIndex(d, z, idx);
-    }
-    const auto jdx = hn::BitCast(di64, hn::PromoteTo(du64, j));
-    const auto xj = hn::GatherIndex(d, x, jdx);
-    const auto yj = hn::GatherIndex(d, y, jdx);
-    const auto zj = hn::GatherIndex(d, z, jdx);
-    const auto dx = hn::Sub(xi, xj);
-    const auto dy = hn::Sub(yi, yj);
-    auto dz = hn::Sub(zi, zj);
-    if constexpr (Periodic) {  // the nearest image: Round is nearbyint in the default mode
-      dz = hn::Sub(dz, hn::Mul(per, hn::Round(hn::Div(dz, per))));
-    }
-    // Touching: dx^2 + dy^2 + dz^2 < (r_i + r_j)^2, summed left to right as the portable
-    // search does; a NaN does not touch.
-    const auto d2 = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
-    const auto touch = hn::And(live, hn::Lt(d2, hn::LoadU(d, touch2 + s0 + s)));
-    // The index vectors have lanes half as wide as the doubles: they take the mask as bits.
-    std::uint8_t bits[(max_search_lanes + 7) / 8];
-    hn::StoreMaskBits(d, touch, bits);
-    const auto slots = hn::Add(hn::Set(du, s0 + s), lane);
-    const auto touch_u = hn::LoadMaskBits(du, bits);  // the same mask, in the index lanes
-    pack_store(du, rows, touch_u, bits, out.i + size);
-    pack_store(du, j, touch_u, bits, out.j + size);
-    pack_store(du, slots, touch_u, bits, out.slot + size);
-    pack_store(d, dx, touch, bits, out.dx + size);
-    pack_store(d, dy, touch, bits, out.dy + size);
-    pack_store(d, dz, touch, bits, out.dz + size);
-    size += hn::CountTrue(d, touch);
+                                     hn::Set(du, slot_row[s]));
+    size += test_and_pack<Periodic>(d, du, rows, hn::LoadU(du, js),
+                                    hn::Add(hn::Set(du, s0 + s), lane),
+                                    hn::LoadU(d, touch2 + s0 + s), hn::FirstN(d, live_count),
+                                    x, y, z, n, per, out, size);
   }
   return size;
 }
 
-/// The four variants of the wide search, [periodic][prefetch].
+/// The wide search over packed pairs (touching_pairs.hpp, TouchingEntriesSearch), N =
+/// Lanes(d) at a time.
+template <bool Periodic, bool Prefetch>
+std::size_t touching_entries_wide(std::size_t count, const std::uint32_t* row,
+                                  const std::uint32_t* partner, const std::uint32_t* slot,
+                                  const double* touch2, const double* x, const double* y,
+                                  const double* z, std::size_t n, double period,
+                                  const TouchingPairs& out, const PartnerPrefetch& ahead) {
+  const hn::ScalableTag<double> d;
+  const hn::Rebind<std::uint32_t, decltype(d)> du;
+  const std::size_t lanes = hn::Lanes(d);
+  const auto per = hn::Set(d, period);
+  std::size_t size = 0;
+  for (std::size_t s = 0; s < count; s += lanes) {
+    if constexpr (Prefetch) {
+      const std::size_t q1 = std::min(s + PartnerPrefetch::pair_ahead + lanes, count);
+      for (std::size_t q = s + PartnerPrefetch::pair_ahead; q < q1; ++q)
+        for (std::size_t a = 0; a < PartnerPrefetch::count; ++a)
+          hwy::Prefetch(ahead.arrays[a] + partner[q]);
+    }
+    const std::size_t live_count = std::min(lanes, count - s);
+    const auto rows = hn::IfThenElse(hn::FirstN(du, live_count), hn::LoadU(du, row + s),
+                                     hn::Set(du, row[s]));
+    size += test_and_pack<Periodic>(d, du, rows, hn::LoadU(du, partner + s),
+                                    hn::LoadU(du, slot + s), hn::LoadU(d, touch2 + s),
+                                    hn::FirstN(d, live_count), x, y, z, n, per, out, size);
+  }
+  return size;
+}
+
+/// The four variants of each wide search, [periodic][prefetch].
 struct WideSearches {
   TouchingPairsSearch of[2][2] = {
       {&touching_pairs_wide<false, false>, &touching_pairs_wide<false, true>},
       {&touching_pairs_wide<true, false>, &touching_pairs_wide<true, true>}};
+  TouchingEntriesSearch entries[2][2] = {
+      {&touching_entries_wide<false, false>, &touching_entries_wide<false, true>},
+      {&touching_entries_wide<true, false>, &touching_entries_wide<true, true>}};
 };
 
 }  // namespace millscope::engine::HWY_NAMESPACE

@@ -66,4 +66,18 @@ using TouchingPairsSearch = std::size_t (*)(std::size_t first_row, std::size_t e
                                             std::uint32_t* slot_row, const TouchingPairs& out,
                                             const PartnerPrefetch& ahead);
 
+/// The wide search over pairs packed one after another (the near pairs of a block,
+/// step/near_pairs.hpp): which of pairs [0, count) touch, in order, into `out`; returns how
+/// many. Pair k: row[k] (ascending, as in the list), partner[k], list slot slot[k] and
+/// touch2[k] = (r_i + r_j)^2, m^2. Each of the four arrays is read in whole vectors: it needs
+/// max_search_lanes entries past count that hold particle indices below n (they are not
+/// kept). The rest as in TouchingPairsSearch (Prefetch asks `pair_ahead` pairs on).
+using TouchingEntriesSearch = std::size_t (*)(std::size_t count, const std::uint32_t* row,
+                                              const std::uint32_t* partner,
+                                              const std::uint32_t* slot, const double* touch2,
+                                              const double* x, const double* y, const double* z,
+                                              std::size_t n, double period,
+                                              const TouchingPairs& out,
+                                              const PartnerPrefetch& ahead);
+
 }  // namespace millscope::engine

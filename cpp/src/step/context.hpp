@@ -30,6 +30,7 @@ struct alignas(64) StepPartial {
   double loss = 0.0;                              // J: contact::ContactForce::loss
   double spring_work = 0.0;                       // J: see Ledger::spring_work
   double displacement2 = 0.0;                     // largest squared move since the list build
+  double speed2 = 0.0;                            // largest squared speed of the drift, m^2/s^2
   std::size_t bad = std::numeric_limits<std::size_t>::max();  // first particle in a bad state
   std::size_t deepest = std::numeric_limits<std::size_t>::max();   // a contact beyond max_overlap
   double deepest_ratio = 0.0;                                       // its overlap / radius
@@ -43,6 +44,25 @@ struct alignas(64) StepPartial {
       deepest_at_wall = wall;
     }
   }
+};
+
+struct NearPairs;  // step/near_pairs.hpp
+
+/// Whether the wide search looks again for its near pairs at a step, and for those within
+/// which gap of touching, m (step/near_pairs.hpp).
+struct NearLook {
+  bool renew;
+  double gap;
+};
+
+/// What the step loop follows of the near pairs, alike in every thread (run.hpp,
+/// Step::near_renewal): this step's look; the list build they were found in (-1: not yet in
+/// this call); how far any particle may have moved since, m, and in how many steps.
+struct NearWatch {
+  NearLook look;
+  long build = -1;
+  double travel = 0.0;
+  long steps = 0;
 };
 
 /// What a step kernel is specialised for: the law and the scene's shape.
@@ -116,6 +136,7 @@ struct Engine::Access::Step {
   // from that thread's allocator arena and share no cache line with another thread's.
   std::vector<std::unique_ptr<ContactBatch>> batches;
   std::vector<std::unique_ptr<WallBatch>> wall_batches;  // likewise, for the drum's contacts
+  std::vector<std::unique_ptr<NearPairs>> near_pairs;    // likewise, with the wide search
   // The particle pass works in chunks of this many particles, which stay in the first-level
   // cache: 1 KiB of each of the ~20 arrays it reads.
   static constexpr std::size_t particle_chunk = 128;
@@ -162,9 +183,14 @@ struct Engine::Access::Step {
   // The stages, each in its own file.
   template <bool Guard>
   void kick_drift(int t, StepPartial& part);  // kick_drift.hpp
-  void pair_pass(int t, double history_dt, StepPartial& part);  // pair_pass.hpp
-  void pair_pass_in_lanes(int t, double history_dt, StepPartial& part, std::size_t row_begin,
-                          std::size_t own_end, double* const* buffered);  // pair_pass_lanes.hpp
+  // The wide search looks again for its near pairs where `look` says so (near_pairs.hpp).
+  void pair_pass(int t, double history_dt, const NearLook& look,
+                 StepPartial& part);  // pair_pass.hpp
+  void pair_pass_in_lanes(int t, double history_dt, const NearLook& look, StepPartial& part,
+                          std::size_t row_begin, std::size_t own_end,
+                          double* const* buffered);  // pair_pass_lanes.hpp
+  void find_near_pairs(NearPairs& near, ContactBatch& b, std::size_t row_begin,
+                       std::size_t own_end, double gap);  // near_pairs.hpp
   template <class Visit>
   void each_drum_contact(std::size_t i, double history_dt, StepPartial& part,
                          Visit&& visit);                                      // drum_pass.hpp
@@ -178,6 +204,7 @@ struct Engine::Access::Step {
   bool close_step(const StepPartial* parts, double ledger_dt, bool master, long step);  // close.hpp
   bool list_upkeep(int w, int workers, const StepPartial* parts, bool guarded, long step,
                    double theta, double& reach_theta);  // list_upkeep.hpp
+  void near_renewal(const StepPartial* parts, NearWatch& near) const;  // run.hpp
 
   // Ledger: a contact that ends drops what its spring held after the step before (spring.hpp).
   static double spring_energy_at(const materials::PairConstants& pc, double r_star,
@@ -224,7 +251,8 @@ Engine::Access::Step<S>::Step(Engine& engine, StepObserver* obs)
       ahead{{x, y, z, r, vx, vy, vz, wx, wy, wz, inv_m}},
       partial(2 * static_cast<std::size_t>(team)),
       batches(static_cast<std::size_t>(team)),
-      wall_batches(static_cast<std::size_t>(team)) {
+      wall_batches(static_cast<std::size_t>(team)),
+      near_pairs(static_cast<std::size_t>(team)) {
   // A rebuild is due once a particle may have moved skin/2 since the last build. The
   // reference positions are floats: each coordinate is off by at most half an ulp of the
   // drum's largest extent, so the test moves the threshold in by that much (x sqrt(3), and

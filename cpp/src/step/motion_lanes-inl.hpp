@@ -24,9 +24,10 @@ namespace millscope::engine::HWY_NAMESPACE {
 
 /// KickDriftInLanes: the first half kick, v += (F / m) dt/2 (and w += (T / I) dt/2), then
 /// the drift x += v dt; with Periodic, z wraps into [0, period) and the move since the list
-/// build is taken to the nearest image. Returns the largest squared move and, with Guard,
-/// whether every new state passes the guard (speed^2 <= max_speed2, x^2 + y^2 <= radius2;
-/// NaN passes neither). The largest move is exact in any order (a maximum rounds nothing).
+/// build is taken to the nearest image. Returns the largest squared move, the largest squared
+/// speed of the drift (a NaN speed is passed over) and, with Guard, whether every new state
+/// passes the guard (speed^2 <= max_speed2, x^2 + y^2 <= radius2; NaN passes neither). The
+/// maxima are exact in any order (a maximum rounds nothing).
 template <bool Friction, bool Periodic, bool Guard>
 DriftFound kick_drift_in_lanes(const MotionArrays& a, std::size_t lo, std::size_t hi,
                                const DriftSettings& s) {
@@ -35,9 +36,9 @@ DriftFound kick_drift_in_lanes(const MotionArrays& a, std::size_t lo, std::size_
   const MotionArrays m = a;
   const double half_dt = s.half_dt, dt = s.dt, period = s.period;
   const double max_speed2 = s.max_speed2, radius2 = s.radius2;
-  double move2 = 0.0;
+  double move2 = 0.0, speed2 = 0.0;
   int sound = 1;  // an int, which the lanes reduce with &
-#pragma omp simd reduction(max : move2) reduction(& : sound)
+#pragma omp simd reduction(max : move2) reduction(max : speed2) reduction(& : sound)
   for (std::size_t i = lo; i < hi; ++i) {
     const double vxi = m.vx[i] + m.fx[i] * m.inv_m[i] * half_dt;
     const double vyi = m.vy[i] + m.fy[i] * m.inv_m[i] * half_dt;
@@ -64,11 +65,12 @@ DriftFound kick_drift_in_lanes(const MotionArrays& a, std::size_t lo, std::size_
     const double dy = yi - static_cast<double>(m.y_ref[i]);
     const double d2 = dx * dx + dy * dy + dz * dz;
     move2 = move2 < d2 ? d2 : move2;
+    const double v2 = vxi * vxi + vyi * vyi + vzi * vzi;
+    speed2 = speed2 < v2 ? v2 : speed2;
     if constexpr (Guard)
-      sound &= static_cast<int>(vxi * vxi + vyi * vyi + vzi * vzi <= max_speed2) &
-               static_cast<int>(xi * xi + yi * yi <= radius2);
+      sound &= static_cast<int>(v2 <= max_speed2) & static_cast<int>(xi * xi + yi * yi <= radius2);
   }
-  return DriftFound{move2, sound != 0};
+  return DriftFound{move2, speed2, sound != 0};
 }
 
 /// HalfKickInLanes: the second half kick, v += F (dt/2 / m) (and w += T (dt/2 / I)).

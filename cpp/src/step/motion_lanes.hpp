@@ -24,10 +24,12 @@ struct DriftSettings {
   double half_dt, dt, period, max_speed2, radius2;
 };
 
-/// What a drift found: the largest squared move since the list build, m^2, and, where the
-/// guard looked, whether every particle passed it (Engine::Access::Step::sound).
+/// What a drift found: the largest squared move since the list build, m^2; the largest
+/// squared speed it moved at, m^2/s^2; and, where the guard looked, whether every particle
+/// passed it (Engine::Access::Step::sound).
 struct DriftFound {
   double move2;
+  double speed2;
   bool sound;
 };
 

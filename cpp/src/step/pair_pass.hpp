@@ -15,7 +15,8 @@ namespace millscope::engine {
 // the particles after its rows up to its last partner (buffer_end). No two threads write the
 // same place.
 template <class S>
-void Engine::Access::Step<S>::pair_pass(int t, double history_dt, StepPartial& part) {
+void Engine::Access::Step<S>::pair_pass(int t, double history_dt, const NearLook& look,
+                                        StepPartial& part) {
   const std::size_t row_begin = e.row_split_[static_cast<std::size_t>(t)];
   const std::size_t own_end = e.row_split_[static_cast<std::size_t>(t) + 1];
   const std::size_t later = e.buffer_end_[static_cast<std::size_t>(t)] - own_end;  // buffered
@@ -26,10 +27,11 @@ void Engine::Access::Step<S>::pair_pass(int t, double history_dt, StepPartial& p
   for (std::size_t c = 0; c < 12; ++c) buffered[c] = c < width ? buf + c * later : nullptr;
   for (std::size_t c = 0; c < width; ++c) std::fill(own[c] + row_begin, own[c] + own_end, 0.0);
   if constexpr (in_lanes) {
-    pair_pass_in_lanes(t, history_dt, part, row_begin, own_end, buffered);
+    pair_pass_in_lanes(t, history_dt, look, part, row_begin, own_end, buffered);
     return;
   }
 
+  (void)look;  // the wide search's alone
   const std::uint32_t* const start = e.list_.start().data();
   const std::uint32_t* const partner = e.list_.partner().data();
   double* const history = e.list_.history().data();

@@ -1,18 +1,20 @@
 // Stage: the pair pass of the paper's law without the ledger (Engine::Access::Step), each
-// block of rows in three phases: 1. its touching pairs (the wide search where the SIMD path has
-// it, touching_pairs.hpp, else the portable one), 2. their forces in SIMD lanes
+// block of rows in three phases: 1. its touching pairs (the wide search over the block's near
+// pairs where the SIMD path has it, touching_pairs.hpp and near_pairs.hpp, else the portable
+// search over the listed pairs), 2. their forces in SIMD lanes
 // (contact_lanes.hpp), 3. the springs back, and the sums. The vector kernels are the engine's
 // SIMD path's (lane_kernels.hpp).
 #pragma once
 
 #include "step/context.hpp"
+#include "step/near_pairs.hpp"
 
 namespace millscope::engine {
 
 template <class S>
-void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepPartial& part,
-                                                 std::size_t row_begin, std::size_t own_end,
-                                                 double* const* buffered) {
+void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, const NearLook& look,
+                                                 StepPartial& part, std::size_t row_begin,
+                                                 std::size_t own_end, double* const* buffered) {
   const std::uint32_t* const start = e.list_.start().data();
   const std::uint32_t* const partner = e.list_.partner().data();
   double* const history = e.list_.history().data();
@@ -56,34 +58,38 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, StepP
   ContactBatch& b = *batches[static_cast<std::size_t>(t)];
   const materials::PairConstants* const pairs = lane_pairs();
   if (wide) {
-    for (std::size_t block = row_begin; block < own_end;) {
-      // 1. The touching pairs of the rows [block, block_end), which hold at most
-      // wide_block_listed listed pairs (or one row that holds more).
-      const std::size_t row_limit = std::min(own_end, block + ContactBatch::max_rows);
-      std::size_t block_end = block + 1;
-      while (block_end < row_limit && start[block_end + 1] - start[block] <= wide_block_listed)
-        ++block_end;
-      const std::uint32_t s0 = start[block], s1 = start[block_end];
+    // 1. The touching pairs of each block of rows: the wide search over the block's near
+    // pairs (near_pairs.hpp), found again first where `look` says so.
+    NearPairs& near = *near_pairs[static_cast<std::size_t>(t)];
+    if (look.renew) find_near_pairs(near, b, row_begin, own_end, look.gap);
+    for (std::size_t k = 0; k + 1 < near.block_row.size(); ++k) {
+      const std::size_t p0 = near.block_pair[k], count = near.block_pair[k + 1] - p0;
       b.size = 0;  // reserve_listed counts its room from size
-      b.reserve_listed(s1 - s0);
+      b.reserve_listed(count);
       const TouchingPairs out{b.i.data(),  b.j.data(),  b.slot.data(),
                               b.dx.data(), b.dy.data(), b.dz.data()};
-      b.size = lanes.touching_pairs[!EndWalls][prefetch](block, block_end, start, partner, x, y,
-                                                         z, touch2, n, period,
-                                                         b.slot_row.data(), out, ahead);
+      b.size = lanes.touching_entries[!EndWalls][prefetch](
+          count, near.row.data() + p0, near.partner.data() + p0, near.slot.data() + p0,
+          near.touch2.data() + p0, x, y, z, n, period, out, ahead);
       for (std::size_t c = 0; c < b.size; ++c) {
         const double* const hist = history + static_cast<std::size_t>(b.slot[c]) * hs;
         b.sx[c] = hist[0], b.sy[c] = hist[1], b.sz[c] = hist[2];
         if constexpr (!OneMaterial) b.pair[c] = lane_pair(mat[b.i[c]], mat[b.j[c]]);
       }
       // A listed pair that does not touch has its history cleared; those that touch get
-      // theirs back in phase 3.
-      std::fill(history + static_cast<std::size_t>(s0) * hs,
-                history + static_cast<std::size_t>(s1) * hs, 0.0);
+      // theirs back in phase 3. Only near pairs can hold one, but when they have just been
+      // found, every listed pair of the block is cleared: after a list build, or at the first
+      // step of a call, a pair that touched at the step before may no longer be near.
+      if (look.renew) {
+        std::fill(history + static_cast<std::size_t>(start[near.block_row[k]]) * hs,
+                  history + static_cast<std::size_t>(start[near.block_row[k + 1]]) * hs, 0.0);
+      } else {
+        for (std::size_t q = p0; q < p0 + count; ++q)
+          std::fill_n(history + static_cast<std::size_t>(near.slot[q]) * hs, hs, 0.0);
+      }
       // 2. Their forces, several at a time.
       lanes.contact_forces[OneMaterial](b, pairs, r, inv_m, vx, vy, vz, wx, wy, wz, history_dt);
       sum_block(b);
-      block = block_end;
     }
     return;
   }

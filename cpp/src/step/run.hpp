@@ -55,15 +55,18 @@ void Engine::Access::Step<S>::run(long steps) {
       each_share([&](int t) {
         batches[static_cast<std::size_t>(t)] = std::make_unique<ContactBatch>();
         wall_batches[static_cast<std::size_t>(t)] = std::make_unique<WallBatch>(particle_chunk);
+        near_pairs[static_cast<std::size_t>(t)] = std::make_unique<NearPairs>();
       });
     }
     bool failed = false;  // the same in every thread
+    NearWatch near{{true, e.near_gap_}};  // the wide search's near pairs (near_pairs.hpp)
     if (!e.forces_valid_) {
+      near.build = e.list_.builds();
       // The forces of the initial state; the tangential history does not advance.
       StepPartial* const parts = partials_of(-1);
       each_share([&](int t) {
         parts[t] = StepPartial{};
-        pair_pass(t, 0.0, parts[t]);
+        pair_pass(t, 0.0, near.look, parts[t]);
       });
 #pragma omp barrier
       each_share([&](int t) { particle_pass(t, 0.0, false, parts[t]); });
@@ -75,6 +78,7 @@ void Engine::Access::Step<S>::run(long steps) {
     // Every thread follows the drum angle and the angle of the last lifter refresh itself, so
     // that the decisions below need no shared write.
     double theta = e.theta_, reach_theta = e.reach_theta_;
+
     for (long s = 0; !failed; ++s) {
       StepPartial* const parts = partials_of(s);
       // The state guards look at every guard_interval-th step of the engine's count and at the
@@ -97,11 +101,42 @@ void Engine::Access::Step<S>::run(long steps) {
       theta += e.omega_ * dt;
       if (!list_upkeep(w, workers, parts, guarded, first_step + s + 1, theta, reach_theta))
         break;
-      each_share([&](int t) { pair_pass(t, dt, parts[t]); });
+      near_renewal(parts, near);
+      each_share([&](int t) { pair_pass(t, dt, near.look, parts[t]); });
 #pragma omp barrier
       each_share([&](int t) { particle_pass(t, dt, true, parts[t]); });
     }
+    if (master) e.near_gap_ = near.look.gap;  // where the next call starts; no thread reads it now
   }
+}
+
+// Whether the wide search looks again for its near pairs before this step's pair pass
+// (near_pairs.hpp), from the step's partials: after a list build, or before a pair farther
+// than the gap when they were found may touch, twice the farthest any particle may have
+// moved since (the margin covers the rounding of the drifts' sums). The gap doubles, up to
+// the skin, where the search looked again within steps_low steps, and halves where it waited
+// more than steps_high. Every thread calls it and decides alike.
+template <class S>
+void Engine::Access::Step<S>::near_renewal(const StepPartial* parts, NearWatch& near) const {
+  constexpr long steps_low = 4, steps_high = 32;
+  constexpr double margin = 0.99;           // of the gap
+  constexpr double least_gap = 1.0 / 64.0;  // of the skin
+  double speed2 = 0.0;
+  for (int b = 0; b < team; ++b) speed2 = std::max(speed2, parts[b].speed2);
+  near.travel += std::sqrt(speed2) * dt;
+  ++near.steps;
+  const bool built = e.list_.builds() != near.build;
+  NearLook& look = near.look;
+  look.renew = built || !(2.0 * near.travel < margin * look.gap);
+  if (!look.renew) return;
+  if (!built) {
+    const double skin = e.list_.skin();
+    if (near.steps < steps_low) look.gap = std::min(2.0 * look.gap, skin);
+    if (near.steps > steps_high) look.gap = std::max(0.5 * look.gap, least_gap * skin);
+  }
+  near.build = e.list_.builds();
+  near.travel = 0.0;
+  near.steps = 0;
 }
 
 /// The kernel of a law for the scene's shape, chosen once per engine.
