@@ -282,7 +282,6 @@ double Engine::bytes_per_particle() const {
            bytes(order_) + bytes(lifter_reach_);
   for (const auto& b : buffers_) total += bytes(b);
   total += static_cast<double>(list_.bytes()) + bytes(list_moved_) + bytes(touch_dist2_) +
-           bytes(near_dist2_) +
            bytes(row_split_) + bytes(particle_split_) + bytes(buffer_end_);
   return total / static_cast<double>(n_);
 }
@@ -771,8 +770,7 @@ void Engine::Access::split_particles(Engine& e) {
 void Engine::Access::list_touch_distances(Engine& e) {
   const auto& start = e.list_.start();
   const auto& partner = e.list_.partner();
-  e.touch_dist2_.assign(partner.size() + max_search_lanes, 0.0);
-  e.near_dist2_.assign(partner.size() + max_search_lanes, 0.0);  // set by the wide search
+  e.touch_dist2_.assign(partner.size(), 0.0);
   for (std::size_t i = 0; i + 1 < start.size(); ++i) {
     for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
       const double r_sum = e.r_[i] + e.r_[partner[s]];

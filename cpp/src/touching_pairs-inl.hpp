@@ -83,11 +83,11 @@ HWY_INLINE void pack_store(D d, hn::Vec<D> v, hn::Mask<D> m, const std::uint8_t*
 }
 
 /// Tests N = Lanes(d) pairs at once, rows i and partners j (the lanes past `live` are not
-/// kept), and packs those that touch at out[size..]: row, partner, slot and x_i - x_j.
-/// touch2 holds each pair's (r_i + r_j)^2. Returns how many touched.
+/// kept), and packs those closer than their distance (within2, squared: (r_i + r_j)^2 for
+/// touching) at out[size..]: row, partner, slot and x_i - x_j. Returns how many it packed.
 template <bool Periodic, class D, class DU>
 HWY_INLINE std::size_t test_and_pack(D d, DU du, hn::Vec<DU> rows, hn::Vec<DU> j,
-                                     hn::Vec<DU> slots, hn::Vec<D> touch2, hn::Mask<D> live,
+                                     hn::Vec<DU> slots, hn::Vec<D> within2, hn::Mask<D> live,
                                      const double* x, const double* y, const double* z,
                                      std::size_t n, hn::Vec<D> per, const TouchingPairs& out,
                                      std::size_t size) {
@@ -126,7 +126,7 @@ HWY_INLINE std::size_t test_and_pack(D d, DU du, hn::Vec<DU> rows, hn::Vec<DU> j
   // Touching: dx^2 + dy^2 + dz^2 < (r_i + r_j)^2, summed left to right as the portable
   // search does; a NaN does not touch.
   const auto d2 = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
-  const auto touch = hn::And(live, hn::Lt(d2, touch2));
+  const auto touch = hn::And(live, hn::Lt(d2, within2));
   // The index vectors have lanes half as wide as the doubles: they take the mask as bits.
   std::uint8_t bits[(max_search_lanes + 7) / 8];
   hn::StoreMaskBits(d, touch, bits);
@@ -146,7 +146,7 @@ template <bool Periodic, bool Prefetch>
 std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
                                 const std::uint32_t* start, const std::uint32_t* partner,
                                 const double* x, const double* y, const double* z,
-                                const double* touch2, std::size_t n, double period,
+                                const double* within2, std::size_t n, double period,
                                 std::uint32_t* slot_row, const TouchingPairs& out,
                                 const PartnerPrefetch& ahead) {
   const hn::ScalableTag<double> d;                  // the positions, N lanes
@@ -193,7 +193,7 @@ std::size_t touching_pairs_wide(std::size_t first_row, std::size_t end_row,
                                      hn::Set(du, slot_row[s]));
     size += test_and_pack<Periodic>(d, du, rows, hn::LoadU(du, js),
                                     hn::Add(hn::Set(du, s0 + s), lane),
-                                    hn::LoadU(d, touch2 + s0 + s), hn::FirstN(d, live_count),
+                                    hn::LoadU(d, within2 + s), hn::FirstN(d, live_count),
                                     x, y, z, n, per, out, size);
   }
   return size;

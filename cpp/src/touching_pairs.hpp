@@ -50,11 +50,14 @@ struct PartnerPrefetch {
   static constexpr std::uint32_t pair_ahead = 256;   // listed pairs
 };
 
-/// The wide search: the touching pairs of the Verlet list rows [first_row, end_row) (half list:
-/// row i's partners partner[start[i]..start[i + 1])), in list order, into `out`; returns how
-/// many. x, y, z (m) hold the n particles' centres; touch2 (m^2), by list slot, each listed
-/// pair's (r_i + r_j)^2, with room for max_search_lanes beyond the block's last listed pair
-/// (whole vectors are loaded). Periodic (the template's first flag):
+/// The wide search: the pairs of the Verlet list rows [first_row, end_row) (half list: row i's
+/// partners partner[start[i]..start[i + 1])) closer than a distance of their own, in list
+/// order, into `out`; returns how many. x, y, z (m) hold the n particles' centres; within2
+/// (m^2) that distance squared for each listed pair of the block, from its first (listed pair
+/// start[first_row] + k at within2[k]): (r_i + r_j)^2 finds the touching pairs, (r_i + r_j +
+/// g)^2 those within g of touching (step/near_pairs.hpp). It needs room for max_search_lanes
+/// beyond the block's last listed pair (whole vectors are loaded). Periodic (the template's
+/// first flag):
 /// z differences wrap by `period` (m), as dz - period * nearbyint(dz / period). `slot_row` is
 /// scratch for the rows' listed pairs, with room for max_search_lanes beyond them. Prefetching
 /// (the second flag): asks for what `ahead` names as it goes.
@@ -62,8 +65,9 @@ using TouchingPairsSearch = std::size_t (*)(std::size_t first_row, std::size_t e
                                             const std::uint32_t* start,
                                             const std::uint32_t* partner, const double* x,
                                             const double* y, const double* z,
-                                            const double* touch2, std::size_t n, double period,
-                                            std::uint32_t* slot_row, const TouchingPairs& out,
+                                            const double* within2, std::size_t n,
+                                            double period, std::uint32_t* slot_row,
+                                            const TouchingPairs& out,
                                             const PartnerPrefetch& ahead);
 
 /// The wide search over pairs packed one after another (the near pairs of a block,

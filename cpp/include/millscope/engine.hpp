@@ -388,15 +388,11 @@ class Engine {
   std::vector<std::uint32_t> list_moved_;     // the reorder of the list build under way
   // (r_i + r_j)^2 of each listed pair, m^2, in list order (Access::list_touch_distances): the
   // pair touches while |x_i - x_j|^2 is below it. Radii do not change between builds, so the
-  // pair search reads it instead of summing and squaring the radii at every step. Padded with
-  // max_search_lanes zeros for the wide search's whole-vector loads.
+  // pair search reads it instead of summing and squaring the radii at every step.
   std::vector<double> touch_dist2_;
-  // The wide search tests at every step only the listed pairs that were within a gap (m) of
-  // touching when it last looked (src/step/near_pairs.hpp): the gap it last used, and
-  // (r_i + r_j + gap)^2 of each listed pair, m^2, by list slot, set by each thread for its
-  // rows when it looks. The gap changes no result.
+  // The gap, m, within which the wide search last took listed pairs as near, those it tests
+  // at every step (src/step/near_pairs.hpp): where the next call starts. It changes no result.
   double near_gap_ = 0.0;
-  std::vector<double> near_dist2_;
 
   long step_ = 0;
   long rotation_start_ = -1;

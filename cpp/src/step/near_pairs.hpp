@@ -1,16 +1,15 @@
 // The near pairs of a share's rows, for the wide search (Engine::Access::Step): the listed
-// pairs that were within the near gap (Engine::near_gap_, a fraction of the skin) of touching
-// when the search last looked, in list order. The pair pass tests only these at every step
-// (touching_pairs.hpp, TouchingEntriesSearch), and looks for them again, over all listed
-// pairs of its rows, after each list build and once a pair not among them may have come
-// within reach: a pair apart by at least the gap g when they were found can touch only
-// after its two particles moved g between them, and a drift moves a particle by at most
-// |v| dt, so the step loop (run.hpp) sums the largest speed of each drift times dt, and
-// looks again before twice that sum reaches g. The same pairs touch as in a search over the
-// whole list, in the same order: the forces are the same to the bit, whatever the gap. The
-// step loop widens the gap where it looks again within a few steps and narrows it where it
-// looks only every few dozen (the search's cost is the near pairs at every step plus all
-// listed pairs at each look).
+// pairs that were within a gap g (m) of touching when the search last looked, in list order.
+// The pair pass tests only these at every step (touching_pairs.hpp, TouchingEntriesSearch),
+// and looks for them again, over all listed pairs of its rows, after each list build and
+// before a pair not among them may touch: a pair apart by at least g when they were found
+// can touch only once its two particles have moved g between them, and a drift moves a
+// particle by at most |v| dt, so the step loop (run.hpp) sums the largest speed of each drift
+// times dt and looks again before twice that sum reaches g. The same pairs touch as in a
+// search over the whole list, in the same order: the forces are the same to the bit,
+// whatever g. The step loop widens g where it looks again within a few steps and narrows it
+// where it looks only every few dozen (the search's cost is the near pairs at every step
+// plus all listed pairs at each look).
 #pragma once
 
 #include <cstddef>
@@ -29,8 +28,9 @@ struct NearPairs {
   std::vector<std::uint32_t> row, partner, slot;
   std::vector<double> touch2;
   std::vector<std::size_t> block_row, block_pair;
+  // Scratch of a look: (r_i + r_j + gap)^2, m^2, of the share's listed pairs, from its first.
+  std::vector<double> within2;
 
-  std::size_t size() const { return row.size() - max_search_lanes; }
   void start(std::size_t first_row) {
     row.clear(), partner.clear(), slot.clear(), touch2.clear();
     block_row.assign(1, first_row);
@@ -62,11 +62,12 @@ void Engine::Access::Step<S>::find_near_pairs(NearPairs& near, ContactBatch& b,
                                               double gap) {
   const std::uint32_t* const start = e.list_.start().data();
   const std::uint32_t* const partner = e.list_.partner().data();
-  double* const near2 = e.near_dist2_.data();
+  const std::uint32_t first = start[row_begin];
+  near.within2.assign(start[own_end] - first + max_search_lanes, 0.0);
   for (std::size_t i = row_begin; i < own_end; ++i) {
     for (std::uint32_t s = start[i]; s < start[i + 1]; ++s) {
       const double reach = r[i] + r[partner[s]] + gap;
-      near2[s] = reach * reach;
+      near.within2[s - first] = reach * reach;
     }
   }
   near.start(row_begin);
@@ -80,8 +81,8 @@ void Engine::Access::Step<S>::find_near_pairs(NearPairs& near, ContactBatch& b,
     const TouchingPairs out{b.i.data(),  b.j.data(),  b.slot.data(),
                             b.dx.data(), b.dy.data(), b.dz.data()};
     const std::size_t count = lanes.touching_pairs[!EndWalls][prefetch](
-        block, block_end, start, partner, x, y, z, near2, n, period,
-        b.slot_row.data(), out, ahead);
+        block, block_end, start, partner, x, y, z, near.within2.data() + (start[block] - first),
+        n, period, b.slot_row.data(), out, ahead);
     near.add_block(block_end, b, count, e.touch_dist2_.data());
     block = block_end;
   }

@@ -78,7 +78,6 @@ void Engine::Access::Step<S>::run(long steps) {
     // Every thread follows the drum angle and the angle of the last lifter refresh itself, so
     // that the decisions below need no shared write.
     double theta = e.theta_, reach_theta = e.reach_theta_;
-
     for (long s = 0; !failed; ++s) {
       StepPartial* const parts = partials_of(s);
       // The state guards look at every guard_interval-th step of the engine's count and at the
