@@ -46,16 +46,12 @@
 #include <cmath>
 #include <cstddef>
 
+#include "millscope/hot_inline.hpp"
 #include "millscope/materials.hpp"
 
-// The hot loop's calls into the law are inlined: GCC otherwise keeps the law's evaluate() out of
-// line (it is large and called from the pair and wall passes), and a call per contact costs
-// the hot loop a large share of its time.
-#if defined(__GNUC__)
-#define MILLSCOPE_HOT_INLINE inline __attribute__((always_inline))
-#else
-#define MILLSCOPE_HOT_INLINE inline
-#endif
+// The hot loop's calls into the law are inlined (MILLSCOPE_HOT_INLINE): GCC otherwise keeps
+// the law's evaluate() out of line (it is large and called from the pair and wall passes),
+// and a call per contact costs the hot loop a large share of its time.
 
 namespace millscope::contact {
 

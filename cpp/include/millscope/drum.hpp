@@ -27,6 +27,8 @@
 #include <string>
 #include <vector>
 
+#include "millscope/hot_inline.hpp"
+
 namespace millscope::drum {
 
 using Vec3 = Eigen::Vector3d;
@@ -253,8 +255,8 @@ inline LifterProximity closest_on_lifter(const Geometry& g, double phi, const Ve
 
 /// Lifter k against a sphere (centre x, radius r): overlap > 0 when they touch (with the normal
 /// from the lifter into the sphere and the contact point); otherwise -overlap is the gap, m.
-inline WallContact lifter_contact(const Geometry& g, const LifterAngles& at, int k, const Vec3& x,
-                                  double r) {
+MILLSCOPE_HOT_INLINE WallContact lifter_contact(const Geometry& g, const LifterAngles& at, int k,
+                                                const Vec3& x, double r) {
   const auto slot = static_cast<std::size_t>(k);
   const LifterFrame f = lifter_frame(at.cos_phi[slot], at.sin_phi[slot], x);
   const LifterProximity p = closest_on_lifter(g, f, x);
@@ -295,10 +297,11 @@ inline LifterReach lifter_reach(const Geometry& g, const LifterAngles& at, const
 /// drum whose shape is known when compiling: without lifters (Lifters false) or with periodic
 /// ends (EndWalls false) those parts cost nothing (docs/architecture.md, What a scene pays
 /// for). Only the lifters in `reach` are looked at. The step kernels call this; Lifters and
-/// EndWalls must match g.lifters > 0 and g.end_walls.
+/// EndWalls must match g.lifters > 0 and g.end_walls. Inlined, with lifter_contact, so that
+/// the drum pass pays no call and no copy of the result per particle near the drum.
 template <bool Lifters, bool EndWalls>
-inline WallContacts find_contacts_of(const Geometry& g, const LifterAngles& at, const Vec3& x,
-                                     double r, LifterReach reach) {
+MILLSCOPE_HOT_INLINE WallContacts find_contacts_of(const Geometry& g, const LifterAngles& at,
+                                                   const Vec3& x, double r, LifterReach reach) {
   WallContacts out;
   const double rho2 = x.x() * x.x() + x.y() * x.y();
   // Away from the shell, from every lifter and (below) from the end walls: nothing to find.
