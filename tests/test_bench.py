@@ -171,7 +171,9 @@ def test_cli_slice_sizes_report_the_cost_spread(cache: Path, capsys) -> None:
         (["--threads", "100000"], "--threads: '100000' is not valid; it must be an integer in "),
         (["--spin-up", "0.001"], "--spin-up: '0.001' is not valid; it must be finite and >= 0.02"),
         (["--dt", "0"], "--dt: '0' is not valid; it must be finite and > 0 s"),
-        (["--slice-sizes", "100"], "--slice-sizes: '100' is not valid; it must be >= 392"),
+        (["--slice-sizes", "100"], "--slice-sizes: '100' is not valid; it must be in [392, "),
+        (["--slice-sizes", "1000", "5000000"],
+         "--slice-sizes: '5000000' is not valid; it must be in [392, 3914285]"),
         (["--scenes", "mill"], "--scenes: invalid choice: 'mill'"),
         (["--scale", "huge"], "--scale: invalid choice: 'huge'"),
     ],
@@ -210,6 +212,15 @@ def test_throughput_main_refuses_bad_options(capsys) -> None:
         bench.main(["--threads", "0"], prog="throughput.py")
     assert exc.value.code == 2
     assert "throughput.py: error: argument --threads: '0' is not valid" in capsys.readouterr().err
+
+
+def test_run_refuses_a_bad_scene_before_preparing_any(tmp_path: Path) -> None:
+    """A slice too long for a drum was refused only when its turn came, after minutes of the
+    sizes before it: every scene is built first."""
+    with pytest.raises(ValueError, match=re.escape("n_particles = 4000000 is not valid")):
+        bench.run("tiny", threads=[1], steps=2, spin_up_s=0.02, slice_sizes=[1000, 4_000_000],
+                  cache_dir=tmp_path, progress=False, out=io.StringIO())
+    assert not list(tmp_path.iterdir())
 
 
 def test_run_refuses_more_threads_than_the_cores_before_preparing(tmp_path: Path) -> None:

@@ -335,7 +335,7 @@ def test_pilot_mill_refuses_bad_arguments(kwargs: dict[str, Any], pattern: str) 
 # -- axial slices (benchmarks) ---------------------------------------------------------------
 
 
-@pytest.mark.parametrize("n", [392, 10_000, 200_000])
+@pytest.mark.parametrize("n", [392, 10_000, 200_000, 800_000, 3_914_285])
 def test_axial_slice_holds_n_balls_at_the_papers_filling(n: int) -> None:
     paper = pilot_mill(0.71, None, scale="paper")
     s = axial_slice(n, "paper")
@@ -365,7 +365,9 @@ def test_axial_slice_takes_the_stiffness_of_its_scale() -> None:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        ((391, "paper"), "n_particles = 391 is not valid; it must be an integer >= 392"),
+        ((391, "paper"), "n_particles = 391 is not valid; it must be an integer in [392, "),
+        # a period above Drum's longest, 500 m: 0.315 m x 3914286 / 2466 = 500.0001 m
+        ((3_914_286, "paper"), "it must be an integer in [392, 3914285]"),
         ((1000.0, "paper"), "n_particles = 1000.0 is not valid"),
         ((1000, "huge"), "scale = 'huge' is not valid"),
     ],

@@ -128,6 +128,8 @@ def test_lifters_validation(build: Callable[[], object], field: str, value: str)
 @_cases(
     (lambda: Drum(0.0, 0.315, "steel"), "Drum.diameter", "0.0 m"),
     (lambda: Drum(0.88, -0.315, "steel"), "Drum.length", "-0.315 m"),
+    (lambda: Drum(0.88, 51.0, "steel"), "Drum.length", "51.0 m"),
+    (lambda: Drum(0.88, 501.0, "steel", end_walls=False), "Drum.length", "501.0 m"),
     (lambda: Drum(0.88, 0.315, ""), "Drum.material", "''"),
     (lambda: Drum(0.88, 0.315, "steel", end_walls=1), "Drum.end_walls", "1"),
     (lambda: Drum(0.88, 0.315, "steel", lifters="16"), "Drum.lifters", "'16'"),
@@ -137,6 +139,18 @@ def test_lifters_validation(build: Callable[[], object], field: str, value: str)
 )
 def test_drum_validation(build: Callable[[], object], field: str, value: str) -> None:
     _check(build, field, value)
+
+
+def test_a_periodic_drums_length_is_a_period_up_to_500_m_a_walled_ones_up_to_50_m() -> None:
+    """A periodic drum is a slice of a longer mill: its length is the simulation's period (the
+    linear-cost benchmark's 800 000-ball slice is 102 m), not a mill's."""
+    assert Drum(0.88, 102.0, "steel", end_walls=False).length == 102.0
+    assert Drum(0.88, 500.0, "steel", end_walls=False).length == 500.0
+    assert Drum(0.88, 50.0, "steel").length == 50.0
+    with pytest.raises(ValueError, match=r"Drum\.length = 102\.0 m is not valid; .*\(0, 50\]"):
+        Drum(0.88, 102.0, "steel")
+    with pytest.raises(ValueError, match=r"\(0, 500\] m"):
+        Drum(0.88, 500.5, "steel", end_walls=False)
 
 
 @_cases(

@@ -44,7 +44,7 @@ from ..engine.simulation import (
     threads_range,
 )
 from ..model import presets
-from ..model.scene import Scene
+from ..model.scene import MAX_PERIOD_LENGTH, Scene
 from ..model.stiffness import time_step_limit
 
 __all__ = [
@@ -143,7 +143,8 @@ def build_scene(name: str, scale: str) -> Scene:
     if name.startswith(prefix) and name[len(prefix):].isdigit():
         return presets.axial_slice(int(name[len(prefix):]), scale)
     raise ValueError(f"scene = {name!r} is not valid; it must be one of {', '.join(SCENES)} "
-                     f"or '{SLICE}-N' (N balls, N >= {presets.SLICE_MIN_BALLS})")
+                     f"or '{SLICE}-N' (N balls, {presets.SLICE_MIN_BALLS} <= N <= "
+                     f"{presets.SLICE_MAX_BALLS})")
 
 
 @dataclass(frozen=True)
@@ -289,15 +290,16 @@ def measure(sim: Simulation, steps: int, name: str = "") -> Measurement:
 
 # -- command line ------------------------------------------------------------------------------
 
-def _int_at_least(least: int, why: str = "") -> Callable[[str], int]:
+def _int_in(least: int, most: int | None = None, why: str = "") -> Callable[[str], int]:
+    """An argparse type: an integer >= least and, if given, <= most."""
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-        if value < least:
-            raise argparse.ArgumentTypeError(
-                f"{text!r} is not valid; it must be >= {least}{why}")
+        if value < least or (most is not None and value > most):
+            valid = f">= {least}" if most is None else f"in [{least}, {most}]"
+            raise argparse.ArgumentTypeError(f"{text!r} is not valid; it must be {valid}{why}")
         return value
     return parse
 
@@ -342,15 +344,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--threads", nargs="+", type=thread_count, default=None,
                         help="thread counts, each at most the cores this process may use "
                              "(default 1 2, or 1 where the process may use one core)")
-    parser.add_argument("--steps", type=_int_at_least(2), default=20000,
+    parser.add_argument("--steps", type=_int_in(2), default=20000,
                         help="timed steps per run (default 20000)")
     parser.add_argument("--spin-up", type=_float_at_least(MIN_SPIN_UP_S, " s"), default=0.5,
                         help="rotation before timing, s (default 0.5)")
     parser.add_argument("--dt", type=_float_at_least(0.0, " s", strict=True), default=None,
                         help="time step, s (default 0.2 x the smallest Rayleigh time)")
     parser.add_argument("--slice-sizes", nargs="+",
-                        type=_int_at_least(presets.SLICE_MIN_BALLS,
-                                               " (a slice at least 2 ball diameters long)"),
+                        type=_int_in(presets.SLICE_MIN_BALLS, presets.SLICE_MAX_BALLS,
+                                     f" (a slice from 2 ball diameters to {MAX_PERIOD_LENGTH:g}"
+                                     " m long)"),
                         default=None,
                         help="ball counts of the slice scene (default 10000 50000 200000)")
     parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE_DIR,
@@ -375,11 +378,14 @@ def _scene_names(scenes: Sequence[str] | None, slice_sizes: Sequence[int] | None
     return names
 
 
-def _check_dt(names: Sequence[str], scale: str, dt: float | None) -> None:
-    if dt is None:
-        return
+def _check_scenes(names: Sequence[str], scale: str, dt: float | None) -> None:
+    """Builds every scene (each checks its own values) and checks dt against each, before
+    any is prepared: a bad one must not wait for minutes of the others' work."""
     for name in names:
-        limit = time_step_limit(build_scene(name, scale))
+        scene = build_scene(name, scale)
+        if dt is None:
+            continue
+        limit = time_step_limit(scene)
         if dt > limit.dt:
             raise ValueError(
                 f"--dt = {dt:g} s is not valid; it must be {limit.valid_range()} (scene "
@@ -436,7 +442,7 @@ def run(scale: str = "paper", scenes: Sequence[str] | None = None,
     if not (math.isfinite(spin_up_s) and spin_up_s >= MIN_SPIN_UP_S):
         raise ValueError(f"spin_up_s = {spin_up_s!r} s is not valid; it must be >= "
                          f"{MIN_SPIN_UP_S} s")
-    _check_dt(names, scale, dt)
+    _check_scenes(names, scale, dt)
 
     def emit(text: str) -> None:
         print(text, file=stream, flush=True)

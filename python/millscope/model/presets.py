@@ -30,7 +30,16 @@ from numbers import Integral, Real
 from types import MappingProxyType
 from typing import Any
 
-from .scene import MAX_SPEED_FRACTION, Drum, Fraction, Lifters, Material, Pair, Scene
+from .scene import (
+    MAX_PERIOD_LENGTH,
+    MAX_SPEED_FRACTION,
+    Drum,
+    Fraction,
+    Lifters,
+    Material,
+    Pair,
+    Scene,
+)
 
 __all__ = [
     "BALL_COUNT",
@@ -41,6 +50,7 @@ __all__ = [
     "PARTICLE_DIAMETER",
     "SCALES",
     "SCALE_BIAS",
+    "SLICE_MAX_BALLS",
     "SLICE_MIN_BALLS",
     "ScaleBias",
     "CaseKey",
@@ -82,6 +92,8 @@ SOFT_STIFFNESS = 0.001  # "soft": every shear modulus x this
 # axial_slice: the fewest balls, so that the slice is >= 2 ball diameters long (Scene's rule
 # for periodic ends) at the paper's 2466 balls per 0.315 m
 SLICE_MIN_BALLS = math.ceil(2.0 * BALL_DIAMETER * BALL_COUNT / DRUM_LENGTH)
+# ... and the most, so that its period is at most Drum's MAX_PERIOD_LENGTH
+SLICE_MAX_BALLS = math.floor(MAX_PERIOD_LENGTH * BALL_COUNT / DRUM_LENGTH)
 
 
 @dataclass(frozen=True)
@@ -450,8 +462,9 @@ def axial_slice(n_particles: int, scale: str = "paper", speed_fraction: float = 
     Parameters
     ----------
     n_particles : int
-        Number of balls, >= 392 (the slice must be at least two ball diameters, 0.05 m, long
-        so that a ball meets at most one periodic image of another).
+        Number of balls, in [392, 3 914 285]: the slice must be at least two ball diameters,
+        0.05 m, long so that a ball meets at most one periodic image of another, and at most
+        500 m long (Drum's longest period).
     scale : {"paper", "small", "tiny", "soft"}
         Sets only the stiffness: every shear modulus x 1 ("paper"), x 0.01 ("small") or
         x 0.001 ("tiny", "soft"); see :data:`SCALES`. The length is always the one above.
@@ -467,12 +480,12 @@ def axial_slice(n_particles: int, scale: str = "paper", speed_fraction: float = 
     if (
         not isinstance(n_particles, Integral)
         or isinstance(n_particles, bool)
-        or n_particles < SLICE_MIN_BALLS
+        or not SLICE_MIN_BALLS <= n_particles <= SLICE_MAX_BALLS
     ):
         raise ValueError(
-            f"n_particles = {n_particles!r} is not valid; it must be an integer >= "
-            f"{SLICE_MIN_BALLS} "
-            f"(a periodic slice at least two ball diameters, {2 * BALL_DIAMETER:g} m, long)"
+            f"n_particles = {n_particles!r} is not valid; it must be an integer in "
+            f"[{SLICE_MIN_BALLS}, {SLICE_MAX_BALLS}] (a periodic slice from two ball "
+            f"diameters, {2 * BALL_DIAMETER:g} m, to {MAX_PERIOD_LENGTH:g} m long)"
         )
     speed = _speed(speed_fraction, "speed_fraction")
     length = DRUM_LENGTH * int(n_particles) / BALL_COUNT

@@ -12,9 +12,10 @@ are refused.
 Scenes round-trip through plain JSON-able dicts (:meth:`Scene.to_dict`,
 :meth:`Scene.from_dict`), which is how records and checkpoints carry them, and through JSON
 files (:meth:`Scene.load`). Every number has a range a mill can have, so that nothing computed
-from a scene overflows: a drum 0.05 to 20 m across and up to 50 m long, spheres of at least
-0.1 mm, materials of 1 to 1e5 kg/m^3 and 1 to 1e12 Pa, restitution in [0.01, 1], friction up to 10,
-gravity up to 1000 m/s^2, at most 2**31 - 1 spheres. A dict or file that is not a valid
+from a scene overflows: a drum 0.05 to 20 m across and up to 50 m long (a periodic slice's
+period up to 500 m), spheres of at least 0.1 mm, materials of 1 to 1e5 kg/m^3 and 1 to 1e12 Pa,
+restitution in [0.01, 1], friction up to 10, gravity up to 1000 m/s^2, at most 2**31 - 1
+spheres. A dict or file that is not a valid
 scene raises :class:`SceneError` (a ``ValueError``) naming the field, its value and the valid
 range.
 """
@@ -62,6 +63,10 @@ LIFTER_PROFILES = ("rectangular", "trapezoidal")
 #: Drum diameters, m: a 5 cm laboratory jar to beyond the largest mills (about 12 m).
 DRUM_DIAMETER_RANGE = (0.05, 20.0)
 MAX_DRUM_LENGTH = 50.0  # m: tube mills are up to about 15 m long
+#: The longest period of a drum with periodic ends, m: a slice of a longer mill, whose length
+#: is a size of the simulation, not of a mill (the engine's linear-cost benchmark runs slices
+#: of up to 800 000 balls, 102 m at the paper's filling).
+MAX_PERIOD_LENGTH = 500.0
 MIN_SPHERE_DIAMETER = 1e-4  # m: 0.1 mm
 #: The engine indexes spheres with 32-bit integers.
 MAX_SPHERES = 2**31 - 1
@@ -250,8 +255,8 @@ class Drum:
     diameter : float
         Inner diameter D, m, in [0.05, 20].
     length : float
-        Inner length L, m, in (0, 50] (the period along the axis when ``end_walls`` is
-        False).
+        Inner length L, m, in (0, 50]; with periodic ends (``end_walls`` False) the period
+        along the axis, in (0, 500].
     material : str
         Name of the drum's material (shell, lifters and end walls).
     end_walls : bool
@@ -285,13 +290,15 @@ class Drum:
                     f"{lift.count * lift.width:.4g} m is not valid; it must be < "
                     f"2 pi (R - height) = {room:.4g} m, the circumference at the lifter tips"
                 )
+        end_walls = _checks.flag("Drum.end_walls", self.end_walls)
+        longest = MAX_DRUM_LENGTH if end_walls else MAX_PERIOD_LENGTH
         _set(
             self,
             diameter=diameter,
-            length=_checks.between("Drum.length", self.length, 0.0, MAX_DRUM_LENGTH, "m",
+            length=_checks.between("Drum.length", self.length, 0.0, longest, "m",
                                    low_open=True),
             material=_checks.text("Drum.material", self.material),
-            end_walls=_checks.flag("Drum.end_walls", self.end_walls),
+            end_walls=end_walls,
         )
 
     @property
