@@ -1,5 +1,8 @@
 // The first phase of the engine's pair pass, several listed pairs at a time: which listed
 // pairs of a block of Verlet list rows touch (|x_i - x_j| < r_i + r_j), packed in list order.
+// The pair pass runs it in two forms (step/near_pairs.hpp): over a block's listed pairs, with
+// a distance a gap beyond touching, to find the near pairs when it looks for them, and at
+// every step over the near pairs alone, packed one after another, to find those that touch.
 // This header holds what the search reads and writes; touching_pairs-inl.hpp holds the search
 // itself, compiled once per SIMD target (lane_kernels.cpp).
 //
