@@ -78,8 +78,9 @@ void Engine::Access::Step<S>::pair_pass_in_lanes(int t, double history_dt, const
       }
       // A listed pair that does not touch has its history cleared; those that touch get
       // theirs back in phase 3. Only near pairs can hold one, but when they have just been
-      // found, every listed pair of the block is cleared: after a list build, or at the first
-      // step of a call, a pair that touched at the step before may no longer be near.
+      // found, every listed pair of the block is cleared: a pair that touched at the step
+      // before may no longer be near (its slot moved in a list build, or this is a call's first
+      // step, or the gap is now narrower than it moved).
       if (look.renew) {
         std::fill(history + static_cast<std::size_t>(start[near.block_row[k]]) * hs,
                   history + static_cast<std::size_t>(start[near.block_row[k + 1]]) * hs, 0.0);
