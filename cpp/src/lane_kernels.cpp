@@ -14,7 +14,8 @@
 //   Highway's AVX3_DL (Ice Lake's additions: nothing these kernels use) and the Arm SVE
 //   variants fixed at 128 or 256 bits (SVE, which adapts to any width, is compiled). Every
 //   target compiled costs build time.
-// - On Arm, NEON (the baseline there), SVE and SVE2 (built, not measured: no Arm host here).
+// - On Arm, NEON (the baseline there), SVE and SVE2: not timed, checked for the same results
+//   under emulation (benchmarks/arm_paths.sh).
 #define HWY_DISABLED_TARGETS (HWY_SSSE3 | HWY_SSE4 | HWY_AVX3_DL | HWY_SVE_256 | HWY_SVE2_128)
 
 #include <cctype>
