@@ -6,14 +6,14 @@
 # (AVX-512, AVX2, portable).
 #
 # usage: benchmarks/arm_paths.sh [--setup]
-#   --setup  first install what it needs from Debian (run as root): the aarch64 cross compiler,
-#            QEMU, and the arm64 builds of Highway, FFTW and OpenMP's runtime
+#   --setup  first install what it needs from Debian (run as root): the aarch64 cross compiler
+#            (with OpenMP's runtime), QEMU, and the arm64 builds of Highway and FFTW
 # environment:
 #   BUILD  build folders' parent (default out/arm-paths)
 #
 # Each run prints one line per scene, thread count and path, and "every path gives the same
-# state" when they agree to the bit; the exit status is that of the emulated check (1 when
-# the paths disagree). The native check takes about a second, each emulated one about a
+# state" when they agree to the bit; the exit status is 1 when an emulated check fails (its
+# paths disagree, or it stops with an error). The native check takes about a second, each emulated one about a
 # minute; nothing here is a timing.
 set -euo pipefail
 

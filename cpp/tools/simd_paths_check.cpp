@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <stdexcept>
 #include <cstring>
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -69,14 +69,15 @@ Scene small_mill(bool end_walls, bool two_materials, int threads, const std::str
   return s;
 }
 
-/// The fingerprint of a run: the balls fall for 6000 steps (0.12 s, onto the shell and the
-/// lifters), then the drum turns at 2 rad/s for 4000 more; the torque's 100-step means and
-/// the final state.
+/// What a run ends with.
 struct Outcome {
   std::uint64_t print;   // the fingerprint
   double overlap_ratio;  // the deepest contact at the end, of the smaller radius (> 0: touching)
 };
 
+/// A run: the balls fall for 6000 steps (0.12 s, onto the shell and the lifters), then the
+/// drum turns at 2 rad/s for 4000 more; its fingerprint covers the torque's 100-step means and
+/// the final positions, velocities and spins.
 Outcome run(bool end_walls, bool two_materials, int threads, const std::string& path) {
   const Scene scene = small_mill(end_walls, two_materials, threads, path);
   en::Engine engine(scene.config);
@@ -122,7 +123,7 @@ int main(int argc, char** argv) {
                         two_materials ? "two materials" : "one material", threads,
                         out.overlap_ratio, static_cast<unsigned long long>(out.print),
                         out.print == first ? "" : "  DIFFERS");
-            std::fflush(stdout);  // under emulation a run takes minutes
+            std::fflush(stdout);  // each line as its run ends (emulated runs are slow)
           }
         }
       }
