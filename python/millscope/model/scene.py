@@ -15,9 +15,8 @@ files (:meth:`Scene.load`). Every number has a range a mill can have, so that no
 from a scene overflows: a drum 0.05 to 20 m across and up to 50 m long (a periodic slice's
 period up to 500 m), spheres of at least 0.1 mm, materials of 1 to 1e5 kg/m^3 and 1 to 1e12 Pa,
 restitution in [0.01, 1], friction up to 10, gravity up to 1000 m/s^2, at most 2**31 - 1
-spheres. A dict or file that is not a valid
-scene raises :class:`SceneError` (a ``ValueError``) naming the field, its value and the valid
-range.
+spheres. A dict or file that is not a valid scene raises :class:`SceneError` (a
+``ValueError``) naming the field, its value and the valid range.
 """
 
 from __future__ import annotations
